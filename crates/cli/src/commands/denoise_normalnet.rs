@@ -1,0 +1,1 @@
+//! The NormalNet method of `normalnet denoise` (not built yet).

@@ -1,0 +1,13 @@
+//! One module per subcommand; each has `Args` (clap) and `run(args, quiet)`.
+
+pub mod bench;
+pub mod dataset;
+pub mod denoise;
+pub mod denoise_normalnet;
+pub mod info;
+pub mod metrics;
+pub mod noise;
+pub mod render;
+pub mod shapes;
+pub mod train;
+pub mod voxelize;

@@ -1,0 +1,1 @@
+//! Classical mesh denoisers on one normal-filter + vertex-update skeleton (SPEC §4).

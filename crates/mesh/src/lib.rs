@@ -1,0 +1,22 @@
+//! Triangle meshes for NormalNet: the `Mesh` (positions + faces), its
+//! `Topology` (flat CSR connectivity, r-rings), per-face geometry, file I/O
+//! (OBJ, OFF, PLY, STL), the noise models of the literature and the error
+//! metrics E_a / E_v (SPEC §1–3).
+//!
+//! Everything downstream (filters, voxelizer, network, CLI) starts here; this
+//! crate knows nothing about denoising or deep learning.
+
+pub mod csr;
+pub mod error;
+pub mod geometry;
+pub mod mesh;
+pub mod progress;
+pub mod topology;
+pub mod vec3;
+
+pub use csr::Csr;
+pub use error::MeshError;
+pub use geometry::FaceGeometry;
+pub use mesh::Mesh;
+pub use progress::{NoProgress, Progress};
+pub use topology::{NO_FACE, Topology};

@@ -1,0 +1,124 @@
+//! `Mesh`: the triangle mesh at rest, two plain arrays (libigl's V/F).
+
+use crate::error::MeshError;
+use crate::vec3::Vec3;
+
+/// A triangle mesh: vertex positions and faces as vertex-index triples.
+///
+/// Invariants (checked by [`Mesh::new`]): at least one vertex and one face,
+/// every index `< positions.len()`, every coordinate finite, counts fit u32.
+/// Degenerate faces (zero area, repeated indices) are allowed: their normal
+/// is zero everywhere in the toolkit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// one `[x, y, z]` per vertex (len #V)
+    pub positions: Vec<Vec3>,
+    /// one `[i, j, k]` per face, counter-clockwise seen from outside (len #F)
+    pub faces: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// Builds a mesh and checks its invariants.
+    ///
+    /// # Errors
+    /// [`MeshError::Empty`], [`MeshError::IndexOutOfRange`],
+    /// [`MeshError::NonFinite`], [`MeshError::TooLarge`].
+    pub fn new(positions: Vec<Vec3>, faces: Vec<[u32; 3]>) -> Result<Self, MeshError> {
+        if positions.is_empty() || faces.is_empty() {
+            return Err(MeshError::Empty {
+                vertices: positions.len(),
+                faces: faces.len(),
+            });
+        }
+        if positions.len() > u32::MAX as usize {
+            return Err(MeshError::TooLarge(positions.len()));
+        }
+        if faces.len() > u32::MAX as usize {
+            return Err(MeshError::TooLarge(faces.len()));
+        }
+        if let Some((vertex, p)) = positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(MeshError::NonFinite { vertex, value: *p });
+        }
+        let n = positions.len();
+        for (face, f) in faces.iter().enumerate() {
+            if let Some(&index) = f.iter().find(|&&i| i as usize >= n) {
+                return Err(MeshError::IndexOutOfRange {
+                    face,
+                    index: index as u64,
+                    num_vertices: n,
+                });
+            }
+        }
+        Ok(Mesh { positions, faces })
+    }
+
+    /// Number of vertices (#V).
+    pub fn num_vertices(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of faces (#F).
+    pub fn num_faces(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The three corner positions of face `f`.
+    #[inline]
+    pub fn corners(&self, f: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.faces[f];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    /// The same connectivity with other positions (len must be #V).
+    ///
+    /// # Panics
+    /// If `positions.len() != self.num_vertices()`.
+    pub fn with_positions(&self, positions: Vec<Vec3>) -> Mesh {
+        assert_eq!(positions.len(), self.positions.len(), "vertex count must not change");
+        Mesh {
+            positions,
+            faces: self.faces.clone(),
+        }
+    }
+
+    /// Axis-aligned bounding box `(min, max)`.
+    pub fn bounding_box(&self) -> (Vec3, Vec3) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_empty_bad_index_and_nan() {
+        assert!(matches!(Mesh::new(vec![], vec![]), Err(MeshError::Empty { .. })));
+        let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        assert!(matches!(
+            Mesh::new(p.clone(), vec![[0, 1, 3]]),
+            Err(MeshError::IndexOutOfRange { face: 0, index: 3, .. })
+        ));
+        let mut q = p.clone();
+        q[1][2] = f64::NAN;
+        let err = Mesh::new(q, vec![[0, 1, 2]]).unwrap_err();
+        assert!(err.to_string().contains("vertex 1"), "{err}");
+        assert!(Mesh::new(p, vec![[0, 1, 2]]).is_ok());
+    }
+}

@@ -1,0 +1,1 @@
+//! NormalNet network (placeholder while the crate is built).
