@@ -9,6 +9,7 @@
 pub mod csr;
 pub mod error;
 pub mod geometry;
+pub mod io;
 pub mod mesh;
 pub mod progress;
 pub mod topology;
@@ -17,6 +18,7 @@ pub mod vec3;
 pub use csr::Csr;
 pub use error::MeshError;
 pub use geometry::FaceGeometry;
+pub use io::{Format, WriteOptions, read_mesh, read_mesh_as, write_mesh, write_mesh_as};
 pub use mesh::Mesh;
 pub use progress::{NoProgress, Progress};
 pub use topology::{NO_FACE, Topology};

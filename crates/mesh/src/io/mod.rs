@@ -1,0 +1,275 @@
+//! Mesh file I/O (SPEC §1): OBJ, OFF, PLY (ASCII and binary) and STL (ASCII
+//! and binary) readers, OBJ/OFF/PLY/STL writers.
+//!
+//! Policy, identical for every format:
+//! - vertex order and face order of the file are kept; polygons are
+//!   fan-triangulated `(v0, v_i, v_{i+1})` in file order, so the error metrics
+//!   can compare meshes face by face;
+//! - attributes other than positions and face indices (texture coordinates,
+//!   normals, colours, extra PLY properties) are read past and dropped;
+//! - only STL, which has no shared vertices, merges bit-identical coincident
+//!   vertices (in order of first appearance);
+//! - any defect (truncated file, bad index, non-finite coordinate, wrong
+//!   element count, empty file) is a [`MeshError`] naming the file and the
+//!   line (text) or byte offset / element (binary); the readers never panic;
+//! - writers print coordinates in the shortest decimal form that reads back
+//!   to the same `f64` (text formats), or the exact bits (binary PLY); STL is
+//!   f32 by definition. Output is written to a temporary file in the target
+//!   directory and renamed into place, so a crash never leaves half a mesh.
+
+mod obj;
+mod off;
+mod ply;
+mod stl;
+
+use crate::error::MeshError;
+use crate::mesh::Mesh;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// A mesh file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Format {
+    /// Wavefront OBJ (`v`, `f`).
+    Obj,
+    /// Object File Format (`OFF` header, counts, vertices, polygons).
+    Off,
+    /// Stanford PLY, ASCII or binary (the header says which); written as
+    /// binary little endian unless [`WriteOptions::ply_ascii`] is set.
+    Ply,
+    /// STL, ASCII or binary (detected from the content); written as binary.
+    Stl,
+}
+
+impl Format {
+    /// The format named by the file extension (case-insensitive), if any.
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(Format::Obj),
+            "off" => Some(Format::Off),
+            "ply" => Some(Format::Ply),
+            "stl" => Some(Format::Stl),
+            _ => None,
+        }
+    }
+
+    /// Parses a format name (`obj`, `off`, `ply`, `stl`; case-insensitive).
+    pub fn from_name(name: &str) -> Option<Format> {
+        Format::from_path(Path::new(&format!("x.{name}")))
+    }
+}
+
+/// Options of the writers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// Write PLY as ASCII instead of binary little endian.
+    pub ply_ascii: bool,
+}
+
+fn format_of(path: &Path) -> Result<Format, MeshError> {
+    Format::from_path(path).ok_or_else(|| MeshError::UnknownFormat {
+        path: path.to_path_buf(),
+    })
+}
+
+/// Reads a mesh, choosing the format from the extension.
+///
+/// # Errors
+/// [`MeshError::UnknownFormat`], [`MeshError::Io`], [`MeshError::Parse`] and
+/// the invariant errors of [`Mesh::new`] (wrapped as `Parse` with the file).
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<Mesh, MeshError> {
+    let path = path.as_ref();
+    read_mesh_as(path, format_of(path)?)
+}
+
+/// Reads a mesh in the given format, whatever the extension.
+///
+/// # Errors
+/// As [`read_mesh`].
+pub fn read_mesh_as(path: impl AsRef<Path>, format: Format) -> Result<Mesh, MeshError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_mesh(&bytes, format, path)
+}
+
+/// Parses a mesh from memory; `path` is only used in error messages.
+///
+/// # Errors
+/// As [`read_mesh`].
+pub fn parse_mesh(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh, MeshError> {
+    let (positions, faces) = match format {
+        Format::Obj => obj::parse(bytes, path)?,
+        Format::Off => off::parse(bytes, path)?,
+        Format::Ply => ply::parse(bytes, path)?,
+        Format::Stl => stl::parse(bytes, path)?,
+    };
+    finish(positions, faces, path)
+}
+
+/// Builds the mesh, turning invariant errors into errors naming the file.
+fn finish(positions: Vec<[f64; 3]>, faces: Vec<[u32; 3]>, path: &Path) -> Result<Mesh, MeshError> {
+    if positions.is_empty() || faces.is_empty() {
+        return Err(perr(
+            path,
+            0,
+            format!(
+                "no mesh in file: {} vertices, {} faces",
+                positions.len(),
+                faces.len()
+            ),
+        ));
+    }
+    Mesh::new(positions, faces).map_err(|e| match e {
+        MeshError::Parse { .. } | MeshError::Io { .. } => e,
+        other => perr(path, 0, other.to_string()),
+    })
+}
+
+/// Writes a mesh atomically, choosing the format from the extension.
+///
+/// # Errors
+/// [`MeshError::UnknownFormat`], [`MeshError::Io`].
+pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> {
+    let path = path.as_ref();
+    write_mesh_as(path, mesh, format_of(path)?, &WriteOptions::default())
+}
+
+/// Writes a mesh atomically in the given format.
+///
+/// # Errors
+/// [`MeshError::Io`].
+pub fn write_mesh_as(
+    path: impl AsRef<Path>,
+    mesh: &Mesh,
+    format: Format,
+    options: &WriteOptions,
+) -> Result<(), MeshError> {
+    let path = path.as_ref();
+    write_atomically(path, |w| match format {
+        Format::Obj => obj::write(w, mesh),
+        Format::Off => off::write(w, mesh),
+        Format::Ply => ply::write(w, mesh, options.ply_ascii),
+        Format::Stl => stl::write(w, mesh),
+    })
+}
+
+/// Encodes a mesh into memory (what [`write_mesh_as`] would write).
+pub fn encode_mesh(mesh: &Mesh, format: Format, options: &WriteOptions) -> Vec<u8> {
+    let mut out = Vec::new();
+    let r = match format {
+        Format::Obj => obj::write(&mut out, mesh),
+        Format::Off => off::write(&mut out, mesh),
+        Format::Ply => ply::write(&mut out, mesh, options.ply_ascii),
+        Format::Stl => stl::write(&mut out, mesh),
+    };
+    // Writing into a Vec cannot fail.
+    debug_assert!(r.is_ok());
+    out
+}
+
+/// Runs `body` on a buffered temporary file next to `path`, then renames the
+/// temporary file onto `path`. On any error the temporary file is removed.
+pub fn write_atomically(
+    path: &Path,
+    body: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), MeshError> {
+    let io = |source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let tmp = tempfile::Builder::new()
+        .prefix(".normalnet-")
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .map_err(io)?;
+    {
+        let mut w = std::io::BufWriter::with_capacity(1 << 20, tmp.as_file());
+        body(&mut w).map_err(io)?;
+        w.flush().map_err(io)?;
+    }
+    tmp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
+/// A parse error at `line` (0: whole file / binary) of `path`.
+pub(crate) fn perr(path: &Path, line: usize, message: impl Into<String>) -> MeshError {
+    MeshError::Parse {
+        path: path.to_path_buf(),
+        line,
+        message: message.into(),
+    }
+}
+
+/// Splits a line into whitespace-separated tokens.
+#[inline]
+pub(crate) fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
+    line.split(|b| b.is_ascii_whitespace())
+        .filter(|t| !t.is_empty())
+}
+
+/// Parses a finite f64 from a token.
+#[inline]
+pub(crate) fn parse_f64(tok: &[u8]) -> Option<f64> {
+    let s = std::str::from_utf8(tok).ok()?;
+    s.parse::<f64>().ok()
+}
+
+/// Parses an unsigned integer from a token.
+#[inline]
+pub(crate) fn parse_u64(tok: &[u8]) -> Option<u64> {
+    if tok.is_empty() || tok.len() > 19 {
+        return None;
+    }
+    let mut v: u64 = 0;
+    for &b in tok {
+        if !b.is_ascii_digit() {
+            return None;
+        }
+        v = v * 10 + (b - b'0') as u64;
+    }
+    Some(v)
+}
+
+/// Parses a signed integer from a token.
+#[inline]
+pub(crate) fn parse_i64(tok: &[u8]) -> Option<i64> {
+    match tok.first() {
+        Some(b'-') => parse_u64(&tok[1..]).map(|v| -(v as i64)),
+        Some(b'+') => parse_u64(&tok[1..]).map(|v| v as i64),
+        _ => parse_u64(tok).map(|v| v as i64),
+    }
+}
+
+/// Lossy printable form of a token for error messages.
+pub(crate) fn show(tok: &[u8]) -> String {
+    let s = String::from_utf8_lossy(&tok[..tok.len().min(40)]).into_owned();
+    if tok.len() > 40 { format!("{s}…") } else { s }
+}
+
+/// Appends the fan triangulation of `poly` to `faces`.
+#[inline]
+pub(crate) fn fan(poly: &[u32], faces: &mut Vec<[u32; 3]>) {
+    for i in 1..poly.len() - 1 {
+        faces.push([poly[0], poly[i], poly[i + 1]]);
+    }
+}
+
+/// Iterates lines (without `\n` / `\r\n`) with 1-based numbers.
+pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
+    let bytes = bytes.strip_suffix(b"\n").unwrap_or(bytes);
+    bytes.split(|&b| b == b'\n').enumerate().map(|(i, l)| {
+        let l = l.strip_suffix(b"\r").unwrap_or(l);
+        (i + 1, l)
+    })
+}
+
+#[cfg(test)]
+mod tests;
