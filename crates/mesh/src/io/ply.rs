@@ -1,4 +1,10 @@
-//! placeholder
+//! Stanford PLY: ASCII, binary little endian and binary big endian. Vertex
+//! positions come from the `x`, `y`, `z` properties of element `vertex`
+//! (any scalar type), faces from the list property `vertex_indices` (or
+//! `vertex_index`) of element `face` (any integer count and index type),
+//! fan-triangulated. Every other element and property is read past.
+
+use super::{fan, perr, show};
 use crate::error::MeshError;
 use crate::mesh::Mesh;
 use std::io::Write;
@@ -6,9 +12,521 @@ use std::path::Path;
 
 type Parsed = (Vec<[f64; 3]>, Vec<[u32; 3]>);
 
-pub(super) fn parse(_bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
-    Err(super::perr(path, 0, "ply reading is not implemented yet"))
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
 }
-pub(super) fn write(_w: &mut dyn Write, _mesh: &Mesh, _ascii: bool) -> std::io::Result<()> {
-    Err(std::io::Error::other("PLY writing is not implemented yet"))
+
+impl Scalar {
+    fn from_name(s: &[u8]) -> Option<Scalar> {
+        Some(match s {
+            b"char" | b"int8" => Scalar::I8,
+            b"uchar" | b"uint8" => Scalar::U8,
+            b"short" | b"int16" => Scalar::I16,
+            b"ushort" | b"uint16" => Scalar::U16,
+            b"int" | b"int32" => Scalar::I32,
+            b"uint" | b"uint32" => Scalar::U32,
+            b"float" | b"float32" => Scalar::F32,
+            b"double" | b"float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn is_int(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Scalar(Scalar),
+    List(Scalar, Scalar),
+}
+
+#[derive(Debug)]
+struct Property {
+    name: String,
+    kind: Kind,
+}
+
+#[derive(Debug)]
+struct Element {
+    name: String,
+    count: usize,
+    props: Vec<Property>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Encoding {
+    Ascii,
+    Le,
+    Be,
+}
+
+struct Header {
+    encoding: Encoding,
+    elements: Vec<Element>,
+    /// byte offset of the data
+    data_start: usize,
+    /// number of header lines (ASCII data line numbers continue from here)
+    lines: usize,
+}
+
+fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
+    if bytes.is_empty() {
+        return Err(perr(path, 0, "no mesh in file: empty PLY file"));
+    }
+    if !bytes.starts_with(b"ply\n") && !bytes.starts_with(b"ply\r\n") {
+        return Err(perr(path, 1, "not a PLY file (first line must be \"ply\")"));
+    }
+    let mut pos = 0;
+    let mut ln = 0;
+    let mut encoding = None;
+    let mut elements: Vec<Element> = Vec::new();
+    loop {
+        let Some(nl) = bytes[pos..].iter().position(|&b| b == b'\n') else {
+            return Err(perr(path, ln + 1, "header ends without end_header"));
+        };
+        let line = &bytes[pos..pos + nl];
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        pos += nl + 1;
+        ln += 1;
+        let mut tok = super::tokens(line);
+        let kw = tok.next().unwrap_or_default();
+        match kw {
+            b"ply" if ln == 1 => {}
+            b"comment" | b"obj_info" | b"" => {}
+            b"format" => {
+                let f = tok.next().unwrap_or_default();
+                encoding = Some(match f {
+                    b"ascii" => Encoding::Ascii,
+                    b"binary_little_endian" => Encoding::Le,
+                    b"binary_big_endian" => Encoding::Be,
+                    _ => return Err(perr(path, ln, format!("unknown PLY format {:?}", show(f)))),
+                });
+            }
+            b"element" => {
+                let name = tok.next().unwrap_or_default();
+                let c = tok.next().unwrap_or_default();
+                let count = super::parse_u64(c)
+                    .filter(|&c| c <= u32::MAX as u64)
+                    .ok_or_else(|| {
+                        perr(
+                            path,
+                            ln,
+                            format!("element {:?}: bad count {:?}", show(name), show(c)),
+                        )
+                    })?;
+                elements.push(Element {
+                    name: String::from_utf8_lossy(name).into_owned(),
+                    count: count as usize,
+                    props: Vec::new(),
+                });
+            }
+            b"property" => {
+                let Some(el) = elements.last_mut() else {
+                    return Err(perr(path, ln, "property before any element"));
+                };
+                let t = tok.next().unwrap_or_default();
+                let ty = |t: &[u8]| {
+                    Scalar::from_name(t).ok_or_else(|| {
+                        perr(path, ln, format!("unknown property type {:?}", show(t)))
+                    })
+                };
+                let kind = if t == b"list" {
+                    let c = ty(tok.next().unwrap_or_default())?;
+                    if !c.is_int() {
+                        return Err(perr(path, ln, "list count type must be an integer type"));
+                    }
+                    Kind::List(c, ty(tok.next().unwrap_or_default())?)
+                } else {
+                    Kind::Scalar(ty(t)?)
+                };
+                let name = tok
+                    .next()
+                    .ok_or_else(|| perr(path, ln, "property without a name"))?;
+                el.props.push(Property {
+                    name: String::from_utf8_lossy(name).into_owned(),
+                    kind,
+                });
+            }
+            b"end_header" => break,
+            _ => {
+                return Err(perr(
+                    path,
+                    ln,
+                    format!("unexpected header line {:?}", show(line)),
+                ));
+            }
+        }
+    }
+    let encoding = encoding.ok_or_else(|| perr(path, ln, "header has no format line"))?;
+    Ok(Header {
+        encoding,
+        elements,
+        data_start: pos,
+        lines: ln,
+    })
+}
+
+/// Where the mesh lives inside the elements.
+struct Layout {
+    vertex: usize,
+    xyz: [usize; 3],
+    face: Option<(usize, usize)>,
+}
+
+fn layout(h: &Header, path: &Path) -> Result<Layout, MeshError> {
+    let vertex = h
+        .elements
+        .iter()
+        .position(|e| e.name == "vertex")
+        .ok_or_else(|| perr(path, 0, "no mesh in file: PLY header has no vertex element"))?;
+    let mut xyz = [usize::MAX; 3];
+    for (k, n) in ["x", "y", "z"].iter().enumerate() {
+        let p = h.elements[vertex]
+            .props
+            .iter()
+            .position(|p| p.name == *n)
+            .ok_or_else(|| perr(path, 0, format!("vertex element has no property {n}")))?;
+        if !matches!(h.elements[vertex].props[p].kind, Kind::Scalar(_)) {
+            return Err(perr(path, 0, format!("vertex property {n} is a list")));
+        }
+        xyz[k] = p;
+    }
+    let face = match h.elements.iter().position(|e| e.name == "face") {
+        None => None,
+        Some(fe) => {
+            let p = h.elements[fe]
+                .props
+                .iter()
+                .position(|p| {
+                    (p.name == "vertex_indices" || p.name == "vertex_index")
+                        && matches!(p.kind, Kind::List(..))
+                })
+                .ok_or_else(|| perr(path, 0, "face element has no list property vertex_indices"))?;
+            if let Kind::List(_, t) = h.elements[fe].props[p].kind
+                && !t.is_int()
+            {
+                return Err(perr(
+                    path,
+                    0,
+                    "face vertex_indices must have an integer type",
+                ));
+            }
+            Some((fe, p))
+        }
+    };
+    Ok(Layout { vertex, xyz, face })
+}
+
+pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
+    let h = parse_header(bytes, path)?;
+    let lay = layout(&h, path)?;
+    let nv = h.elements[lay.vertex].count;
+    let mut positions = Vec::with_capacity(nv.min(bytes.len() / 3));
+    let mut faces = Vec::new();
+    let mut src: Box<dyn Source> = match h.encoding {
+        Encoding::Ascii => Box::new(Ascii {
+            data: bytes,
+            pos: h.data_start,
+            line: h.lines + 1,
+        }),
+        e => Box::new(Binary {
+            data: bytes,
+            pos: h.data_start,
+            be: e == Encoding::Be,
+        }),
+    };
+    let mut poly: Vec<u32> = Vec::with_capacity(8);
+    for (ei, el) in h.elements.iter().enumerate() {
+        let ctx = |src: &dyn Source, i: usize, what: &str| {
+            let (line, at) = src.place();
+            perr(path, line, format!("element {} {i}{at}: {what}", el.name))
+        };
+        for i in 0..el.count {
+            let mut p = [0.0; 3];
+            for (pi, prop) in el.props.iter().enumerate() {
+                match prop.kind {
+                    Kind::Scalar(t) => {
+                        let v = src
+                            .scalar(t)
+                            .map_err(|m| ctx(&*src, i, &format!("property {}: {m}", prop.name)))?;
+                        if ei == lay.vertex
+                            && let Some(k) = lay.xyz.iter().position(|&x| x == pi)
+                        {
+                            if !v.is_finite() {
+                                return Err(ctx(
+                                    &*src,
+                                    i,
+                                    &format!("non-finite coordinate {} = {v}", prop.name),
+                                ));
+                            }
+                            p[k] = v;
+                        }
+                    }
+                    Kind::List(ct, it) => {
+                        let n = src.scalar(ct).map_err(|m| {
+                            ctx(&*src, i, &format!("list {} count: {m}", prop.name))
+                        })?;
+                        if !(n >= 0.0 && n <= u32::MAX as f64) {
+                            return Err(ctx(
+                                &*src,
+                                i,
+                                &format!("list {} has bad length {n}", prop.name),
+                            ));
+                        }
+                        let n = n as usize;
+                        let is_face = lay.face == Some((ei, pi));
+                        if is_face {
+                            poly.clear();
+                        }
+                        for k in 0..n {
+                            let v = src.scalar(it).map_err(|m| {
+                                ctx(&*src, i, &format!("list {} item {k}: {m}", prop.name))
+                            })?;
+                            if is_face {
+                                if !(v >= 0.0 && v < nv as f64) {
+                                    return Err(ctx(
+                                        &*src,
+                                        i,
+                                        &format!(
+                                            "refers to vertex {v} but the file has {nv} vertices"
+                                        ),
+                                    ));
+                                }
+                                poly.push(v as u32);
+                            }
+                        }
+                        if is_face {
+                            if n < 3 {
+                                return Err(ctx(
+                                    &*src,
+                                    i,
+                                    &format!("has {n} vertices, expected at least 3"),
+                                ));
+                            }
+                            fan(&poly, &mut faces);
+                        }
+                    }
+                }
+            }
+            if ei == lay.vertex {
+                positions.push(p);
+            }
+            src.end_instance().map_err(|m| ctx(&*src, i, &m))?;
+        }
+    }
+    if let Some(extra) = src.leftover() {
+        let (line, at) = src.place();
+        return Err(perr(
+            path,
+            line,
+            format!(
+                "{extra} after the last element{at}: the element counts in the header do not match the data"
+            ),
+        ));
+    }
+    Ok((positions, faces))
+}
+
+/// A stream of property values.
+trait Source {
+    /// Next scalar of type `t` (integers exactly, as f64).
+    fn scalar(&mut self, t: Scalar) -> Result<f64, String>;
+    /// End of one element instance (ASCII: the line must end).
+    fn end_instance(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    /// `(line, " (byte offset N)")` for error messages.
+    fn place(&self) -> (usize, String);
+    /// Description of data left after the last element, if any.
+    fn leftover(&mut self) -> Option<String>;
+}
+
+struct Binary<'a> {
+    data: &'a [u8],
+    pos: usize,
+    be: bool,
+}
+
+impl Binary<'_> {
+    #[inline]
+    fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
+        let end = self.pos + N;
+        if end > self.data.len() {
+            return Err("data ends early (truncated file or wrong element count)".into());
+        }
+        let mut a = [0u8; N];
+        a.copy_from_slice(&self.data[self.pos..end]);
+        if self.be {
+            a.reverse();
+        }
+        self.pos = end;
+        Ok(a)
+    }
+}
+
+impl Source for Binary<'_> {
+    #[inline]
+    fn scalar(&mut self, t: Scalar) -> Result<f64, String> {
+        Ok(match t {
+            Scalar::I8 => i8::from_le_bytes(self.take()?) as f64,
+            Scalar::U8 => u8::from_le_bytes(self.take()?) as f64,
+            Scalar::I16 => i16::from_le_bytes(self.take()?) as f64,
+            Scalar::U16 => u16::from_le_bytes(self.take()?) as f64,
+            Scalar::I32 => i32::from_le_bytes(self.take()?) as f64,
+            Scalar::U32 => u32::from_le_bytes(self.take()?) as f64,
+            Scalar::F32 => f32::from_le_bytes(self.take()?) as f64,
+            Scalar::F64 => f64::from_le_bytes(self.take()?),
+        })
+    }
+
+    fn place(&self) -> (usize, String) {
+        (0, format!(" (byte offset {})", self.pos))
+    }
+
+    fn leftover(&mut self) -> Option<String> {
+        let rest = &self.data[self.pos..];
+        // Tolerate trailing line breaks / padding some writers add.
+        if rest.iter().all(|b| b.is_ascii_whitespace() || *b == 0) {
+            None
+        } else {
+            Some(format!("{} bytes of data", rest.len()))
+        }
+    }
+}
+
+struct Ascii<'a> {
+    data: &'a [u8],
+    pos: usize,
+    line: usize,
+}
+
+impl<'a> Ascii<'a> {
+    /// Next token on the current line, or None at the end of the line.
+    fn token_on_line(&mut self) -> Option<&'a [u8]> {
+        while self.pos < self.data.len() && matches!(self.data[self.pos], b' ' | b'\t' | b'\r') {
+            self.pos += 1;
+        }
+        let start = self.pos;
+        while self.pos < self.data.len() && !self.data[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        if self.pos > start {
+            Some(&self.data[start..self.pos])
+        } else {
+            None
+        }
+    }
+
+    /// Skips blank lines; false at the end of data.
+    fn skip_blank_lines(&mut self) -> bool {
+        while self.pos < self.data.len() && self.data[self.pos].is_ascii_whitespace() {
+            if self.data[self.pos] == b'\n' {
+                self.line += 1;
+            }
+            self.pos += 1;
+        }
+        self.pos < self.data.len()
+    }
+}
+
+impl Source for Ascii<'_> {
+    fn scalar(&mut self, t: Scalar) -> Result<f64, String> {
+        let at_line_start = self.pos == 0 || self.data[self.pos - 1] == b'\n';
+        if at_line_start && !self.skip_blank_lines() {
+            return Err("data ends early (truncated file or wrong element count)".into());
+        }
+        let tok = self
+            .token_on_line()
+            .ok_or_else(|| "line ends early (too few values)".to_string())?;
+        let v = super::parse_f64(tok).ok_or_else(|| format!("bad number {:?}", show(tok)))?;
+        if t.is_int() && v.fract() != 0.0 {
+            return Err(format!("{:?} is not an integer", show(tok)));
+        }
+        Ok(v)
+    }
+
+    fn end_instance(&mut self) -> Result<(), String> {
+        if let Some(t) = self.token_on_line() {
+            return Err(format!("unexpected extra value {:?} on the line", show(t)));
+        }
+        if self.pos < self.data.len() {
+            // at '\n'
+            self.pos += 1;
+            self.line += 1;
+        }
+        Ok(())
+    }
+
+    fn place(&self) -> (usize, String) {
+        (self.line, String::new())
+    }
+
+    fn leftover(&mut self) -> Option<String> {
+        if self.skip_blank_lines() {
+            Some("more data".into())
+        } else {
+            None
+        }
+    }
+}
+
+pub(super) fn write(w: &mut dyn Write, mesh: &Mesh, ascii: bool) -> std::io::Result<()> {
+    let index_type = if mesh.num_vertices() > i32::MAX as usize {
+        "uint"
+    } else {
+        "int"
+    };
+    write!(
+        w,
+        "ply\nformat {} 1.0\ncomment written by normalnet\nelement vertex {}\n\
+         property double x\nproperty double y\nproperty double z\nelement face {}\n\
+         property list uchar {index_type} vertex_indices\nend_header\n",
+        if ascii {
+            "ascii"
+        } else {
+            "binary_little_endian"
+        },
+        mesh.num_vertices(),
+        mesh.num_faces()
+    )?;
+    if ascii {
+        for p in &mesh.positions {
+            writeln!(w, "{} {} {}", p[0], p[1], p[2])?;
+        }
+        for f in &mesh.faces {
+            writeln!(w, "3 {} {} {}", f[0], f[1], f[2])?;
+        }
+    } else {
+        let mut buf = Vec::with_capacity(24 * 4096);
+        for chunk in mesh.positions.chunks(4096) {
+            buf.clear();
+            for p in chunk {
+                for c in p {
+                    buf.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+            w.write_all(&buf)?;
+        }
+        for chunk in mesh.faces.chunks(4096) {
+            buf.clear();
+            for f in chunk {
+                buf.push(3);
+                for i in f {
+                    buf.extend_from_slice(&i.to_le_bytes());
+                }
+            }
+            w.write_all(&buf)?;
+        }
+    }
+    Ok(())
 }

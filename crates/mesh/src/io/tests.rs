@@ -101,3 +101,232 @@ fn unknown_extension_and_missing_file() {
     let e = read_mesh("/nonexistent/x.obj").unwrap_err().to_string();
     assert!(e.contains("/nonexistent/x.obj"), "{e}");
 }
+
+fn tri_mesh() -> Mesh {
+    Mesh::new(
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.5],
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+    )
+    .unwrap()
+}
+
+#[test]
+fn every_format_round_trips_in_memory() {
+    let m = tri_mesh();
+    for (format, ascii) in [
+        (Format::Obj, false),
+        (Format::Off, false),
+        (Format::Ply, false),
+        (Format::Ply, true),
+        (Format::Stl, false),
+    ] {
+        let bytes = encode_mesh(&m, format, &WriteOptions { ply_ascii: ascii });
+        let back = parse_mesh(&bytes, format, Path::new("m")).unwrap();
+        assert_eq!(back, m, "{format:?} ascii={ascii}");
+    }
+}
+
+#[test]
+fn off_variants_and_errors() {
+    let ok =
+        "OFF\n# comment\n4 2 0\n0 0 0\n1 0 0 255 0 0\n1 1 0\n0 1 0.5\n4 0 1 2 3\n3 0 2 3 1 1 1\n";
+    let m = parse_mesh(ok.as_bytes(), Format::Off, p()).unwrap();
+    assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3], [0, 2, 3]]);
+    let m = parse_mesh(
+        b"OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+        Format::Off,
+        p(),
+    )
+    .unwrap();
+    assert_eq!(m.num_faces(), 1);
+    let cases: &[(&str, &str)] = &[
+        ("", "empty OFF"),
+        ("PLY\n", ":1: expected an OFF header"),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n",
+            ":4: file ends after 2 of 3 vertices",
+        ),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
+            ":6: face 0 refers to vertex 3",
+        ),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n",
+            ":4: vertex 1: non-finite",
+        ),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n",
+            ":6: face 0 lists 2 of its 3",
+        ),
+        (
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n",
+            ":7: data after the 3 vertices and 1 faces",
+        ),
+        (
+            "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+            ":6: file ends after 1 of 2 faces",
+        ),
+    ];
+    for (s, want) in cases {
+        let e = parse_mesh(s.as_bytes(), Format::Off, p())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "{s:?}: got {e:?}, want {want:?}");
+    }
+}
+
+/// A binary PLY with a few extra properties and an extra element.
+fn ply_binary(be: bool, nv_header: usize) -> Vec<u8> {
+    let mut b = format!(
+        "ply\nformat binary_{}_endian 1.0\ncomment x\nelement vertex {nv_header}\nproperty float x\n\
+         property uchar red\nproperty double y\nproperty int z\nproperty list uchar short junk\n\
+         element face 1\nproperty int flags\nproperty list int uint vertex_indices\n\
+         element edge 1\nproperty list uchar int vertex_indices\nend_header\n",
+        if be { "big" } else { "little" }
+    )
+    .into_bytes();
+    macro_rules! put {
+        ($v:expr) => {
+            if be {
+                b.extend_from_slice(&$v.to_be_bytes())
+            } else {
+                b.extend_from_slice(&$v.to_le_bytes())
+            }
+        };
+    }
+    for (x, y, z) in [
+        (0.5f32, 0.25f64, 1i32),
+        (1.0, 0.0, 2),
+        (0.0, 1.0, 3),
+        (2.0, 2.0, 4),
+    ] {
+        put!(x);
+        put!(7u8);
+        put!(y);
+        put!(z);
+        put!(2u8);
+        put!(-1i16);
+        put!(5i16);
+    }
+    put!(9i32);
+    put!(4i32);
+    for i in [0u32, 1, 2, 3] {
+        put!(i);
+    }
+    put!(2u8);
+    put!(0i32);
+    put!(1i32);
+    b
+}
+
+#[test]
+fn ply_binary_both_endians_with_extra_properties() {
+    for be in [false, true] {
+        let m = parse_mesh(&ply_binary(be, 4), Format::Ply, Path::new("x.ply")).unwrap();
+        assert_eq!(m.positions[0], [0.5, 0.25, 1.0]);
+        assert_eq!(m.positions[3], [2.0, 2.0, 4.0]);
+        assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
+    }
+}
+
+#[test]
+fn ply_errors_name_the_problem() {
+    let path = Path::new("x.ply");
+    // Header claims 3 vertices: the face element is read from vertex data.
+    let e = parse_mesh(&ply_binary(false, 3), Format::Ply, path)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("x.ply") && e.contains("byte offset"), "{e}");
+    // Header claims 5 vertices: the data runs out.
+    let e = parse_mesh(&ply_binary(false, 5), Format::Ply, path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("byte offset") && e.contains("refers to vertex"),
+        "{e}"
+    );
+    // Truncated binary.
+    let full = ply_binary(false, 4);
+    let e = parse_mesh(&full[..full.len() - 5], Format::Ply, path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("element edge 0") && e.contains("data ends early"),
+        "{e}"
+    );
+    let ascii_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                      property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    let cases: &[(&str, &str)] = &[
+        ("", "empty PLY"),
+        ("ply\nformat ascii 1.0\n", "without end_header"),
+        ("0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "__ok__"),
+        (
+            "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
+            "x.ply:13: element face 0: refers to vertex 3",
+        ),
+        (
+            "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n",
+            ":11: element vertex 1: non-finite coordinate y",
+        ),
+        ("0 0 0\n1 0 0\n", "data ends early"),
+        (
+            "0 0 0\n1 0\n0 1 0\n3 0 1 2\n",
+            ":11: element vertex 1: property z: line ends early",
+        ),
+        (
+            "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n",
+            "do not match the data",
+        ),
+        ("0 0 0\n1 0 0\n0 1 0\n3 0 1 2 7\n", "extra value \"7\""),
+    ];
+    for (data, want) in cases {
+        let s = if data.is_empty() || data.starts_with("ply") {
+            data.to_string()
+        } else {
+            format!("{ascii_head}{data}")
+        };
+        let r = parse_mesh(s.as_bytes(), Format::Ply, path);
+        if *want == "__ok__" {
+            assert_eq!(r.unwrap().faces, vec![[0, 1, 2]]);
+            continue;
+        }
+        let e = r.unwrap_err().to_string();
+        assert!(e.contains(want), "{data:?}: got {e:?}, want {want:?}");
+    }
+}
+
+#[test]
+fn stl_ascii_binary_merge_and_errors() {
+    let s = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nendloop\nendfacet\n\
+             facet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1 1 0\n  vertex 0 1 0\n endloop\nendfacet\nendsolid t\n";
+    let m = parse_mesh(s.as_bytes(), Format::Stl, Path::new("a.stl")).unwrap();
+    assert_eq!(m.num_vertices(), 4);
+    assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
+    let bin = encode_mesh(&m, Format::Stl, &WriteOptions::default());
+    assert_eq!(bin.len(), 84 + 100);
+    assert_eq!(parse_mesh(&bin, Format::Stl, p()).unwrap(), m);
+    let e = parse_mesh(&bin[..150], Format::Stl, Path::new("a.stl"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("a.stl") && e.contains("announces 2 triangles"),
+        "{e}"
+    );
+    let cut = s.find("endloop").unwrap();
+    let e = parse_mesh(&s.as_bytes()[..cut], Format::Stl, p())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("truncated"), "{e}");
+    let e = parse_mesh(b"", Format::Stl, p()).unwrap_err().to_string();
+    assert!(e.contains("empty STL"), "{e}");
+    let bad = s.replace("vertex 1 0 0", "vertex 1 NaN 0");
+    let e = parse_mesh(bad.as_bytes(), Format::Stl, p())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(":5: non-finite"), "{e}");
+}
