@@ -1,1 +1,67 @@
-//! Classical mesh denoisers on one normal-filter + vertex-update skeleton (SPEC §4).
+//! Classical mesh denoisers on one normal-filter + vertex-update skeleton
+//! (SPEC §4, §9): GNF (Zhang et al. 2015), its ground-truth-guided variant
+//! (NormalNet's training targets, SPEC §8), and the baselines of the paper's
+//! comparison.
+//!
+//! Input comes from `normalnet_mesh` (`Mesh`, `Topology`, `FaceGeometry`);
+//! results go to the CLI (`normalnet denoise`, `normalnet bench`), and
+//! [`vertex_update`] / [`gt_guided::gt_guided_normals`] to the voxel and
+//! network crates (NormalNet's inference and training targets).
+//!
+//! Every method has a params struct whose `Default` is the reference
+//! defaults, and [`Method`] names them for the CLI and the benchmark.
+
+pub mod driver;
+pub mod error;
+pub mod gnf;
+pub mod vertex_update;
+
+pub use driver::{NormalFilter, Schedule, run_filter};
+pub use error::FilterError;
+pub use gnf::{Gnf, GnfParams, gnf};
+pub use vertex_update::{VertexUpdateBuffers, vertex_update, vertex_update_in_place};
+
+use normalnet_mesh::{Mesh, Progress};
+
+/// A classical denoiser with its parameters (the registry used by
+/// `normalnet denoise` and `normalnet bench`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Method {
+    /// Guided mesh normal filtering (Zhang et al. 2015).
+    Gnf(GnfParams),
+}
+
+impl Method {
+    /// Names accepted by [`Method::from_name`], in display order.
+    pub const NAMES: &'static [&'static str] = &["gnf"];
+
+    /// The method called `name` (case-insensitive) with its default
+    /// parameters.
+    pub fn from_name(name: &str) -> Result<Method, FilterError> {
+        match name.to_ascii_lowercase().as_str() {
+            "gnf" => Ok(Method::Gnf(GnfParams::default())),
+            _ => Err(FilterError::UnknownMethod(name.to_string())),
+        }
+    }
+
+    /// The method's short name (as accepted by [`Method::from_name`]).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Gnf(_) => "gnf",
+        }
+    }
+
+    /// Checks the parameters; the error names the field.
+    pub fn validate(&self) -> Result<(), FilterError> {
+        match self {
+            Method::Gnf(p) => p.validate(),
+        }
+    }
+
+    /// Denoises `mesh` (the result keeps its vertex and face order).
+    pub fn denoise(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
+        match self {
+            Method::Gnf(p) => gnf(mesh, p, progress),
+        }
+    }
+}
