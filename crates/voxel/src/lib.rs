@@ -1,1 +1,18 @@
-//! Voxelization of face neighbourhoods (SPEC §5), procedural shapes and training samples (SPEC §8).
+//! Voxelization of face neighbourhoods (SPEC §5), procedural training shapes
+//! and training samples (SPEC §8).
+//!
+//! The [`Voxelizer`] turns the neighbourhood of a face into the `[3, D, H, W]`
+//! grid the NormalNet CNN reads (crate `normalnet-net`); [`samples`] pairs
+//! grids with GT-guided GNF targets for training; [`shapes`] makes CAD-like
+//! closed meshes to train on.
+
+pub mod error;
+pub mod frame;
+pub mod params;
+pub mod tri_box_overlap;
+pub mod voxelizer;
+
+pub use error::VoxelError;
+pub use frame::Frame;
+pub use params::VoxelParams;
+pub use voxelizer::{Scratch, Voxelizer};
