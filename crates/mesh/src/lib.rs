@@ -6,13 +6,17 @@
 //! Everything downstream (filters, voxelizer, network, CLI) starts here; this
 //! crate knows nothing about denoising or deep learning.
 
+pub mod bvh;
 pub mod csr;
 pub mod error;
 pub mod geometry;
 pub mod io;
 pub mod mesh;
+pub mod metrics;
+pub mod noise;
 pub mod progress;
 pub mod topology;
+pub mod validate;
 pub mod vec3;
 
 pub use csr::Csr;
@@ -20,5 +24,8 @@ pub use error::MeshError;
 pub use geometry::FaceGeometry;
 pub use io::{Format, WriteOptions, read_mesh, read_mesh_as, write_mesh, write_mesh_as};
 pub use mesh::Mesh;
+pub use metrics::{Metrics, compare, per_face_angle_errors};
+pub use noise::{NoiseDirection, NoiseParams, add_noise};
 pub use progress::{NoProgress, Progress};
 pub use topology::{NO_FACE, Topology};
+pub use validate::{MeshReport, validate};

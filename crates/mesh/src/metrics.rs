@@ -1,0 +1,351 @@
+//! Error metrics of a result against ground truth (SPEC §3), defined exactly
+//! as the independent Python checker (`shared/tools/eval/metrics.py`):
+//!
+//! - `E_a`: mean over faces of the angle between result and GT unit face
+//!   normals, in degrees, computed as `atan2(|n_g × n_r|, n_g · n_r)`; a face
+//!   degenerate in either mesh counts as 90° (zero normal, OpenMesh
+//!   convention). Also the MSAE (mean squared angle, rad²) of Sun et al. 2007,
+//!   the RMS angle, median, maximum and the fraction of faces over 30°.
+//! - `E_v` (Zheng et al. 2011, "Bilateral normal filtering"):
+//!   `sqrt( Σ_i Σ_{j∈F(i)} A_j · d(x_i, T)² / (3 Σ_k A_k) )`, `x_i` result
+//!   vertices, `A_j` result face areas, `d` the exact distance to the GT
+//!   surface ([`crate::bvh`]). Reported with `E_v / l_e(GT)` and
+//!   `E_v / bbox diagonal(GT)`.
+//! - distances: area-weighted mean (same weights as `E_v`), one-sided maxima
+//!   over the vertices used by faces (result → GT, GT → result) and their
+//!   maximum, the vertex-sampled symmetric Hausdorff distance.
+//!
+//! Per-vertex distances are computed in parallel; every sum is sequential in
+//! index order, so the numbers do not depend on the thread count.
+
+use crate::bvh::TriangleBvh;
+use crate::error::MeshError;
+use crate::geometry::{face_areas, face_normals, mean_edge_length};
+use crate::mesh::Mesh;
+use crate::progress::{NoProgress, Progress};
+use crate::topology::Topology;
+use crate::vec3::{self, Vec3};
+use rayon::prelude::*;
+
+/// All metrics of one result against its ground truth.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Metrics {
+    /// `E_a`: mean face-normal angle in degrees
+    pub e_a_deg: f64,
+    /// mean squared face-normal angle in rad² (MSAE, Sun et al. 2007)
+    pub msae_rad2: f64,
+    /// sqrt of the mean squared angle in degrees
+    pub rms_angle_deg: f64,
+    /// median face-normal angle in degrees
+    pub median_angle_deg: f64,
+    /// largest face-normal angle in degrees
+    pub max_angle_deg: f64,
+    /// fraction of faces whose angle exceeds 30°
+    pub frac_faces_over_30deg: f64,
+    /// number of degenerate (zero-normal) result faces
+    pub degenerate_faces_result: usize,
+    /// `E_v`: area-weighted RMS distance of result vertices to the GT surface
+    pub e_v: f64,
+    /// `E_v / l_e(GT)`
+    pub e_v_over_le: f64,
+    /// `E_v` divided by the GT bounding-box diagonal
+    pub e_v_over_bbox_diag: f64,
+    /// area-weighted mean distance of result vertices to the GT surface
+    pub mean_dist: f64,
+    /// largest distance of a result vertex to the GT surface
+    pub max_dist_result_to_gt: f64,
+    /// largest distance of a GT vertex to the result surface
+    pub max_dist_gt_to_result: f64,
+    /// vertex-sampled symmetric Hausdorff distance (max of the two above)
+    pub hausdorff: f64,
+    /// `l_e(GT)`: mean GT edge length
+    pub gt_mean_edge_length: f64,
+    /// GT bounding-box diagonal (vertices used by faces)
+    pub gt_bbox_diag: f64,
+    /// GT vertex count
+    pub n_vertices_gt: usize,
+    /// GT face count
+    pub n_faces_gt: usize,
+    /// result vertex count
+    pub n_vertices_result: usize,
+    /// result face count
+    pub n_faces_result: usize,
+    /// whether both meshes have identical face index lists
+    pub faces_identical: bool,
+}
+
+/// The angle in degrees between the normals of each face of `result` and
+/// the same face of `gt` (90° where either is degenerate).
+///
+/// # Errors
+/// [`MeshError::Mismatch`] when the face counts differ.
+pub fn per_face_angle_errors(gt: &Mesh, result: &Mesh) -> Result<Vec<f64>, MeshError> {
+    check_counts(gt, result)?;
+    let ng = face_normals(gt);
+    let nr = face_normals(result);
+    Ok(ng
+        .par_iter()
+        .zip(nr.par_iter())
+        .map(|(&a, &b)| face_angle(a, b).to_degrees())
+        .collect())
+}
+
+/// Angle in radians between two unit (or zero) normals; π/2 when either is zero.
+#[inline]
+fn face_angle(a: Vec3, b: Vec3) -> f64 {
+    if vec3::norm2(a) == 0.0 || vec3::norm2(b) == 0.0 {
+        return std::f64::consts::FRAC_PI_2;
+    }
+    vec3::norm(vec3::cross(a, b)).atan2(vec3::dot(a, b))
+}
+
+fn check_counts(gt: &Mesh, result: &Mesh) -> Result<(), MeshError> {
+    if gt.num_faces() != result.num_faces() {
+        return Err(MeshError::Mismatch(format!(
+            "face counts differ (ground truth {} vs result {}); E_a compares faces one by one \
+             and needs identical connectivity",
+            gt.num_faces(),
+            result.num_faces()
+        )));
+    }
+    Ok(())
+}
+
+/// All metrics of `result` against `gt` (see the module docs).
+///
+/// # Errors
+/// [`MeshError::Mismatch`] when the face counts differ.
+pub fn compare(gt: &Mesh, result: &Mesh) -> Result<Metrics, MeshError> {
+    compare_with_progress(gt, result, &NoProgress)
+}
+
+/// [`compare`] reporting progress (stages: normals, BVH, distances).
+///
+/// # Errors
+/// As [`compare`].
+pub fn compare_with_progress(
+    gt: &Mesh,
+    result: &Mesh,
+    progress: &dyn Progress,
+) -> Result<Metrics, MeshError> {
+    check_counts(gt, result)?;
+    let nf = gt.num_faces();
+    progress.start("metrics", 4);
+    let theta: Vec<f64> = {
+        let ng = face_normals(gt);
+        let nr = face_normals(result);
+        ng.par_iter()
+            .zip(nr.par_iter())
+            .map(|(&a, &b)| face_angle(a, b))
+            .collect()
+    };
+    let degenerate_faces_result = crate::geometry::count_degenerate_faces(result);
+    let deg: Vec<f64> = theta.iter().map(|t| t.to_degrees()).collect();
+    let n = nf as f64;
+    let e_a_deg = deg.iter().sum::<f64>() / n;
+    let msae_rad2 = theta.iter().map(|t| t * t).sum::<f64>() / n;
+    let rms_angle_deg = (deg.iter().map(|t| t * t).sum::<f64>() / n).sqrt();
+    let max_angle_deg = deg.iter().copied().fold(0.0, f64::max);
+    let frac_faces_over_30deg = deg.iter().filter(|&&t| t > 30.0).count() as f64 / n;
+    let median_angle_deg = median(deg);
+    progress.advance(1);
+
+    // Distances result -> GT at the result vertices used by faces.
+    let used_r = used_vertices(result);
+    let used_g = used_vertices(gt);
+    let bvh_g = TriangleBvh::new(gt);
+    let bvh_r = TriangleBvh::new(result);
+    progress.advance(1);
+    let d: Vec<f64> = result
+        .positions
+        .par_iter()
+        .zip(used_r.par_iter())
+        .map(|(&p, &u)| {
+            if u {
+                bvh_g.closest(p).map_or(0.0, |c| c.dist2.sqrt())
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    progress.advance(1);
+    let dg: Vec<f64> = gt
+        .positions
+        .par_iter()
+        .zip(used_g.par_iter())
+        .map(|(&p, &u)| {
+            if u {
+                bvh_r.closest(p).map_or(0.0, |c| c.dist2.sqrt())
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    progress.advance(1);
+
+    let areas = face_areas(result);
+    let mut w = vec![0.0; result.num_vertices()];
+    for k in 0..3 {
+        for (t, a) in result.faces.iter().zip(&areas) {
+            w[t[k] as usize] += a;
+        }
+    }
+    let tot: f64 = areas.iter().sum();
+    let (mut s2, mut s1) = (0.0, 0.0);
+    for (wi, di) in w.iter().zip(&d) {
+        s2 += wi * di * di;
+        s1 += wi * di;
+    }
+    let e_v = (s2 / (3.0 * tot)).sqrt();
+    let mean_dist = s1 / (3.0 * tot);
+    let max_r = d.iter().copied().fold(0.0, f64::max);
+    let max_g = dg.iter().copied().fold(0.0, f64::max);
+    let le = mean_edge_length(gt, &Topology::new(gt.num_vertices(), &gt.faces));
+    let diag = bbox_diag(gt, &used_g);
+    progress.finish();
+    Ok(Metrics {
+        e_a_deg,
+        msae_rad2,
+        rms_angle_deg,
+        median_angle_deg,
+        max_angle_deg,
+        frac_faces_over_30deg,
+        degenerate_faces_result,
+        e_v,
+        e_v_over_le: e_v / le,
+        e_v_over_bbox_diag: e_v / diag,
+        mean_dist,
+        max_dist_result_to_gt: max_r,
+        max_dist_gt_to_result: max_g,
+        hausdorff: max_r.max(max_g),
+        gt_mean_edge_length: le,
+        gt_bbox_diag: diag,
+        n_vertices_gt: gt.num_vertices(),
+        n_faces_gt: nf,
+        n_vertices_result: result.num_vertices(),
+        n_faces_result: result.num_faces(),
+        faces_identical: gt.faces == result.faces,
+    })
+}
+
+/// Exact distances from `points` to the surface of `mesh`, in parallel.
+pub fn point_surface_distances(points: &[Vec3], mesh: &Mesh) -> Vec<f64> {
+    TriangleBvh::new(mesh).distances(points)
+}
+
+fn used_vertices(m: &Mesh) -> Vec<bool> {
+    let mut used = vec![false; m.num_vertices()];
+    for t in &m.faces {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    used
+}
+
+fn bbox_diag(m: &Mesh, used: &[bool]) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (p, _) in m.positions.iter().zip(used).filter(|(_, u)| **u) {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    vec3::norm(vec3::sub(hi, lo))
+}
+
+/// numpy's median: mean of the two middle values for an even count.
+fn median(mut v: Vec<f64>) -> f64 {
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    v.sort_unstable_by(f64::total_cmp);
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra() -> Mesh {
+        Mesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn identical_meshes_have_zero_error() {
+        let m = tetra();
+        let r = compare(&m, &m).unwrap();
+        assert_eq!(r.e_a_deg, 0.0);
+        assert_eq!(r.e_v, 0.0);
+        assert_eq!(r.hausdorff, 0.0);
+        assert_eq!(r.degenerate_faces_result, 0);
+        assert!(r.faces_identical);
+    }
+
+    #[test]
+    fn translated_mesh_and_flipped_face() {
+        let m = tetra();
+        // Shift every vertex by 0.1 along z: face normals unchanged, E_v > 0.
+        let shifted = m.with_positions(
+            m.positions
+                .iter()
+                .map(|p| [p[0], p[1], p[2] + 0.1])
+                .collect(),
+        );
+        let r = compare(&m, &shifted).unwrap();
+        assert!(r.e_a_deg < 1e-12, "{}", r.e_a_deg);
+        assert!(r.e_v > 0.0 && r.e_v <= 0.1 + 1e-15, "{}", r.e_v);
+        // Flip one face: its angle is 180°, the mean 45°.
+        let mut flipped = m.clone();
+        flipped.faces[0] = [0, 1, 2];
+        let a = per_face_angle_errors(&m, &flipped).unwrap();
+        assert!((a[0] - 180.0).abs() < 1e-12 && a[1] == 0.0);
+        let r = compare(&m, &flipped).unwrap();
+        assert!((r.e_a_deg - 45.0).abs() < 1e-12);
+        assert!(!r.faces_identical);
+    }
+
+    #[test]
+    fn degenerate_face_counts_ninety_degrees() {
+        let m = tetra();
+        let mut p = m.positions.clone();
+        p[3] = [0.5, 0.5, 0.0]; // faces 1, 2, 3 stay fine, but make 3 collapse:
+        p[3] = [1.0, 0.0, 0.0]; // vertex 3 onto vertex 1: face [0,1,3] degenerate
+        let r = compare(&m, &m.with_positions(p)).unwrap();
+        assert_eq!(r.degenerate_faces_result, 2); // [0,1,3] and [1,2,3]
+        assert!(r.max_angle_deg >= 90.0);
+    }
+
+    #[test]
+    fn different_face_counts_are_refused() {
+        let m = tetra();
+        let small = Mesh::new(m.positions.clone(), m.faces[..3].to_vec()).unwrap();
+        let e = compare(&m, &small).unwrap_err().to_string();
+        assert!(
+            e.contains("face counts differ (ground truth 4 vs result 3)"),
+            "{e}"
+        );
+        assert!(per_face_angle_errors(&m, &small).is_err());
+    }
+
+    #[test]
+    fn median_like_numpy() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+}
