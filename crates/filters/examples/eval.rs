@@ -4,7 +4,7 @@
 //!
 //! `cargo run --release -p normalnet-filters --example eval -- gnf [Model ...]`
 
-use normalnet_filters::Method;
+use normalnet_filters::{GtGuidedGnfParams, Method, gt_guided_gnf};
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::{NoProgress, read_mesh, vec3};
 use std::time::Instant;
@@ -23,7 +23,8 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let name = args.next().unwrap_or_else(|| "gnf".into());
     let mut models: Vec<String> = args.collect();
-    if models.is_empty() {
+    if models.is_empty() || (models.len() == 1 && models[0].starts_with('{')) {
+        let patch = models.pop();
         models = [
             "Fandisk0.3",
             "Fandisk0.7",
@@ -36,14 +37,41 @@ fn main() {
         ]
         .map(String::from)
         .to_vec();
+        if let Some(p) = patch {
+            models.insert(0, p);
+        }
     }
-    let method = Method::from_name(&name).expect("method");
+    // Optional parameter overrides as JSON: eval bnf '{"include_centre":false}' Model...
+    let oracle = name == "oracle";
+    let mut method = Method::from_name(if oracle { "gnf" } else { &name }).expect("method");
+    if models.first().is_some_and(|m| m.starts_with('{')) {
+        let patch: serde_json::Value =
+            serde_json::from_str(&models.remove(0)).expect("JSON overrides");
+        let mut v = serde_json::to_value(&method).unwrap();
+        let params = v.as_object_mut().unwrap().values_mut().next().unwrap();
+        for (k, x) in patch.as_object().unwrap() {
+            params[k] = x.clone();
+        }
+        method = serde_json::from_value(v).expect("overridden parameters");
+        println!("{}", serde_json::to_string(&method).unwrap());
+    }
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/gd");
     for model in models {
         let noisy = read_mesh(format!("{data}/{model}/Noisy.obj")).expect("noisy");
         let clean = read_mesh(format!("{data}/{model}/Original.obj")).expect("clean");
         let t0 = Instant::now();
-        let out = method.denoise(&noisy, &NoProgress).expect("denoise");
+        let out = if oracle {
+            let gt = face_normals(&clean);
+            let p = GtGuidedGnfParams {
+                mu_g: 0.25,
+                iterations: 10,
+                vertex_iterations: 20,
+                ..Default::default()
+            };
+            gt_guided_gnf(&noisy, &gt, &p, &NoProgress).expect("oracle")
+        } else {
+            method.denoise(&noisy, &NoProgress).expect("denoise")
+        };
         let secs = t0.elapsed().as_secs_f64();
         println!(
             "{model:20} {name:6} noisy E_a {:6.2}  E_a {:6.3}  time {secs:.3} s",

@@ -11,14 +11,22 @@
 //! Every method has a params struct whose `Default` is the reference
 //! defaults, and [`Method`] names them for the CLI and the benchmark.
 
+pub mod bilateral;
 pub mod driver;
 pub mod error;
 pub mod gnf;
+pub mod gt_guided;
+pub mod sun07;
 pub mod vertex_update;
 
+pub use bilateral::{Bnf, BnfParams, bnf};
 pub use driver::{NormalFilter, Schedule, run_filter};
 pub use error::FilterError;
 pub use gnf::{Gnf, GnfParams, gnf};
+pub use gt_guided::{
+    GT_GUIDED_SIGMA_S, GtGuidedGnfParams, gt_guided_gnf, gt_guided_normals, try_gt_guided_normals,
+};
+pub use sun07::{Sun07, Sun07Params, sun07};
 pub use vertex_update::{VertexUpdateBuffers, vertex_update, vertex_update_in_place};
 
 use normalnet_mesh::{Mesh, Progress};
@@ -29,17 +37,23 @@ use normalnet_mesh::{Mesh, Progress};
 pub enum Method {
     /// Guided mesh normal filtering (Zhang et al. 2015).
     Gnf(GnfParams),
+    /// Bilateral normal filtering, local scheme (Zheng et al. 2011).
+    Bnf(BnfParams),
+    /// Fast and effective feature-preserving denoising (Sun et al. 2007).
+    Sun07(Sun07Params),
 }
 
 impl Method {
     /// Names accepted by [`Method::from_name`], in display order.
-    pub const NAMES: &'static [&'static str] = &["gnf"];
+    pub const NAMES: &'static [&'static str] = &["gnf", "bnf", "sun07"];
 
     /// The method called `name` (case-insensitive) with its default
     /// parameters.
     pub fn from_name(name: &str) -> Result<Method, FilterError> {
         match name.to_ascii_lowercase().as_str() {
             "gnf" => Ok(Method::Gnf(GnfParams::default())),
+            "bnf" => Ok(Method::Bnf(BnfParams::default())),
+            "sun07" => Ok(Method::Sun07(Sun07Params::default())),
             _ => Err(FilterError::UnknownMethod(name.to_string())),
         }
     }
@@ -48,6 +62,8 @@ impl Method {
     pub fn name(&self) -> &'static str {
         match self {
             Method::Gnf(_) => "gnf",
+            Method::Bnf(_) => "bnf",
+            Method::Sun07(_) => "sun07",
         }
     }
 
@@ -55,6 +71,8 @@ impl Method {
     pub fn validate(&self) -> Result<(), FilterError> {
         match self {
             Method::Gnf(p) => p.validate(),
+            Method::Bnf(p) => p.validate(),
+            Method::Sun07(p) => p.validate(),
         }
     }
 
@@ -62,6 +80,8 @@ impl Method {
     pub fn denoise(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
         match self {
             Method::Gnf(p) => gnf(mesh, p, progress),
+            Method::Bnf(p) => bnf(mesh, p, progress),
+            Method::Sun07(p) => sun07(mesh, p, progress),
         }
     }
 }
