@@ -59,6 +59,9 @@ pub enum VoxelError {
         /// what is wrong
         message: String,
     },
+    /// A filter error (the GT-guided targets).
+    #[error(transparent)]
+    Filter(#[from] normalnet_filters::FilterError),
     /// A mesh error (construction, I/O).
     #[error(transparent)]
     Mesh(#[from] MeshError),

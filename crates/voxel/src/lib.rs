@@ -9,10 +9,12 @@
 pub mod error;
 pub mod frame;
 pub mod params;
+pub mod samples;
 pub mod tri_box_overlap;
 pub mod voxelizer;
 
 pub use error::VoxelError;
 pub use frame::Frame;
 pub use params::VoxelParams;
+pub use samples::{A_P_EDGES, MU_GS, SampleSource};
 pub use voxelizer::{Scratch, Voxelizer};

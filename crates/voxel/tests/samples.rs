@@ -1,0 +1,189 @@
+//! Training samples: GT-guided targets, their local frame, A_p categories.
+
+use normalnet_mesh::geometry::face_normals;
+use normalnet_mesh::vec3;
+use normalnet_mesh::{Mesh, Topology};
+use normalnet_voxel::samples::{NO_CATEGORY, NUM_CATEGORIES};
+use normalnet_voxel::{MU_GS, SampleSource, VoxelError, VoxelParams};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::collections::HashMap;
+
+/// The cube [0, n]³ with an n×n grid of squares on each side, two triangles
+/// per square, outward orientation.
+fn grid_cube(n: i64) -> Mesh {
+    let mut index: HashMap<[i64; 3], u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut faces = Vec::new();
+    let mut id = |p: [i64; 3], positions: &mut Vec<[f64; 3]>| {
+        *index.entry(p).or_insert_with(|| {
+            positions.push(p.map(|c| c as f64));
+            (positions.len() - 1) as u32
+        })
+    };
+    // (normal axis, side) → the two in-plane axes ordered so u × v = outward.
+    for axis in 0..3 {
+        for side in [0, n] {
+            let (mut u, mut v) = ((axis + 1) % 3, (axis + 2) % 3);
+            if side == 0 {
+                std::mem::swap(&mut u, &mut v);
+            }
+            for i in 0..n {
+                for j in 0..n {
+                    let corner = |a: i64, b: i64| {
+                        let mut p = [0; 3];
+                        p[axis] = side;
+                        p[u] = a;
+                        p[v] = b;
+                        p
+                    };
+                    let q = [
+                        corner(i, j),
+                        corner(i + 1, j),
+                        corner(i + 1, j + 1),
+                        corner(i, j + 1),
+                    ]
+                    .map(|p| id(p, &mut positions));
+                    faces.push([q[0], q[1], q[2]]);
+                    faces.push([q[0], q[2], q[3]]);
+                }
+            }
+        }
+    }
+    Mesh::new(positions, faces).unwrap()
+}
+
+fn noisy_copy(mesh: &Mesh, sigma: f64, seed: u64) -> Mesh {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    mesh.with_positions(
+        mesh.positions
+            .iter()
+            .map(|p| p.map(|c| c + sigma * rng.random_range(-1.0..1.0)))
+            .collect(),
+    )
+}
+
+#[test]
+fn cube_is_closed_and_outward() {
+    let m = grid_cube(4);
+    let t = Topology::new(m.num_vertices(), &m.faces);
+    assert_eq!(t.num_boundary_edges(), 0);
+    assert!(t.non_manifold_edges().is_empty());
+    let n = face_normals(&m);
+    let c = 2.0;
+    for f in 0..m.num_faces() {
+        let centre = m.corners(f).iter().fold([0.0; 3], |s, p| vec3::add(s, *p));
+        let out = vec3::sub(vec3::scale(centre, 1.0 / 3.0), [c; 3]);
+        assert!(vec3::dot(out, n[f]) > 0.0);
+    }
+}
+
+/// μ_g → 0: each target is the mean of the normals of the faces with the
+/// same ground-truth normal, so on a clean mesh the GT normal itself.
+#[test]
+fn tiny_mu_g_targets_equal_gt_normals() {
+    let clean = grid_cube(6);
+    let src = SampleSource::new(clean.clone(), &clean, VoxelParams::tiny(), &[1e-3; 6]).unwrap();
+    let gt = face_normals(&clean);
+    for f in 0..clean.num_faces() {
+        for t in src.world_targets(f) {
+            assert!(
+                vec3::dist2(*t, gt[f]) < 1e-20,
+                "face {f}: {t:?} vs {:?}",
+                gt[f]
+            );
+        }
+    }
+    // Larger μ_g blends across the edges: some edge face differs from GT.
+    let blended = SampleSource::new(clean.clone(), &clean, VoxelParams::tiny(), &MU_GS).unwrap();
+    let max_dev = (0..clean.num_faces())
+        .map(|f| vec3::angle(blended.world_targets(f)[5], gt[f]).to_degrees())
+        .fold(0.0, f64::max);
+    assert!(
+        max_dev > 1.0,
+        "μ_g = 0.5 left every face at its GT normal ({max_dev}°)"
+    );
+}
+
+#[test]
+fn noisy_targets_are_closer_to_gt_than_noisy_normals() {
+    let clean = grid_cube(8);
+    let noisy = noisy_copy(&clean, 0.15, 1);
+    let src = SampleSource::new(noisy.clone(), &clean, VoxelParams::tiny(), &MU_GS).unwrap();
+    let gt = face_normals(&clean);
+    let nn = face_normals(&noisy);
+    let (mut e_noisy, mut e_target) = (0.0, 0.0);
+    for f in 0..clean.num_faces() {
+        e_noisy += vec3::angle(nn[f], gt[f]).to_degrees();
+        e_target += vec3::angle(src.world_targets(f)[2], gt[f]).to_degrees();
+    }
+    let n = clean.num_faces() as f64;
+    println!(
+        "mean angle to GT: noisy {:.2}°, target(μ_g=0.35) {:.2}°",
+        e_noisy / n,
+        e_target / n
+    );
+    assert!(e_target < 0.5 * e_noisy);
+}
+
+#[test]
+fn sample_targets_live_in_the_grid_frame() {
+    let clean = grid_cube(8);
+    let noisy = noisy_copy(&clean, 0.1, 2);
+    let params = VoxelParams::tiny();
+    let src = SampleSource::new(noisy, &clean, params, &MU_GS).unwrap();
+    let mut grid = vec![0.0f32; params.grid_len()];
+    for (f, yaw) in [(0usize, 0.0), (57, 1.3), (300, -2.0)] {
+        let t = src.sample(f, yaw, &mut grid);
+        let frame = src.voxelizer().frame(f, yaw);
+        for k in 0..6 {
+            let local = [t[3 * k] as f64, t[3 * k + 1] as f64, t[3 * k + 2] as f64];
+            let world = frame.to_world(local);
+            assert!(vec3::dist2(world, src.world_targets(f)[k]) < 1e-12);
+        }
+        // The face's own cube (the grid centre) is occupied.
+        let side = params.side();
+        let c = (params.t_s * side + params.t_s) * side + params.t_s;
+        let cells = params.num_cells();
+        assert!(grid[cells + c] > 0.5, "centre cube y = {}", grid[cells + c]);
+    }
+}
+
+#[test]
+fn cube_categories_are_sharp_or_flat() {
+    let clean = grid_cube(10);
+    let src = SampleSource::new(clean.clone(), &clean, VoxelParams::tiny(), &MU_GS).unwrap();
+    let sizes: Vec<usize> = (0..NUM_CATEGORIES)
+        .map(|c| src.category_faces(c).len())
+        .collect();
+    assert_eq!(sizes.iter().sum::<usize>(), clean.num_faces());
+    assert!(
+        sizes[0] > 0 && sizes[3] > 0 && sizes[1] == 0 && sizes[2] == 0,
+        "{sizes:?}"
+    );
+    // Faces whose 2-ring reaches an edge: within two rings of the border
+    // of a side; the central (10−4)² squares of each side are flat.
+    assert_eq!(sizes[3], 6 * 2 * 6 * 6, "{sizes:?}");
+    assert!(src.categories().iter().all(|&c| c != NO_CATEGORY));
+    assert!(
+        src.a_p()
+            .iter()
+            .all(|&a| a.abs() < 1e-9 || (a - 90.0).abs() < 1e-9)
+    );
+}
+
+#[test]
+fn mismatched_pairs_and_bad_mu_are_rejected() {
+    let a = grid_cube(3);
+    let b = grid_cube(4);
+    let err = SampleSource::new(a.clone(), &b, VoxelParams::tiny(), &MU_GS).unwrap_err();
+    assert!(matches!(err, VoxelError::PairMismatch(_)), "{err}");
+    let mut c = a.clone();
+    c.faces.swap(0, 1);
+    let err = SampleSource::new(c, &a, VoxelParams::tiny(), &MU_GS).unwrap_err();
+    assert!(err.to_string().contains("face 0"), "{err}");
+    let err = SampleSource::new(a.clone(), &a, VoxelParams::tiny(), &[0.3; 5]).unwrap_err();
+    assert!(err.to_string().contains("mu_gs"), "{err}");
+    let err = SampleSource::new(a.clone(), &a, VoxelParams::tiny(), &[0.0; 6]).unwrap_err();
+    assert!(err.to_string().contains("mu_gs"), "{err}");
+}
