@@ -8,13 +8,17 @@
 
 pub mod error;
 pub mod frame;
+pub mod loader;
 pub mod params;
+pub mod sampler;
 pub mod samples;
 pub mod tri_box_overlap;
 pub mod voxelizer;
 
 pub use error::VoxelError;
 pub use frame::Frame;
+pub use loader::{Batch, Loader, LoaderConfig};
 pub use params::VoxelParams;
+pub use sampler::{BalancedSampler, SampleRef};
 pub use samples::{A_P_EDGES, MU_GS, SampleSource};
 pub use voxelizer::{Scratch, Voxelizer};
