@@ -1,0 +1,32 @@
+//! Forward samples/s of the `lite` and `paper` networks on sheet-like grids.
+#![allow(missing_docs)]
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use normalnet_cnn::Cnn;
+
+fn forward(c: &mut Criterion) {
+    for (name, grid, channels, batch) in [
+        ("lite", 21, [16, 32, 64], 64),
+        ("paper", 41, [64, 128, 256], 8),
+    ] {
+        let w = common::random_net(7, grid, channels);
+        let cnn = Cnn::new(&w).unwrap();
+        let grids: Vec<f32> = (0..batch)
+            .flat_map(|i| common::sheet_grid(i as u64, grid))
+            .collect();
+        let mut out = vec![0.0f32; batch * 18];
+        let mut g = c.benchmark_group(format!("forward_{name}_{}", cnn.instruction_set()));
+        g.throughput(Throughput::Elements(batch as u64));
+        g.sample_size(10);
+        g.bench_function(format!("batch{batch}"), |b| {
+            b.iter(|| cnn.forward(&grids, &mut out).unwrap())
+        });
+        g.finish();
+    }
+}
+
+criterion_group!(benches, forward);
+criterion_main!(benches);

@@ -1,0 +1,291 @@
+//! Dense 3D convolution, channels-last, batch norm folded in: the kernel of
+//! the residual blocks. The output channels of one output cube are held in
+//! registers (`[f32; CO]`, CO a compile-time constant), so each multiply-add
+//! costs one weight load; the same code is compiled for AVX-512, AVX2+FMA and
+//! plain x86-64 and picked at run time.
+
+use crate::weights::{BatchNormWeights, ConvWeights};
+
+/// Instruction set the kernels were compiled for, detected once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Level {
+    Avx512,
+    Avx2,
+    Scalar,
+}
+
+impl Level {
+    pub(crate) fn detect() -> Level {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                return Level::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                return Level::Avx2;
+            }
+        }
+        Level::Scalar
+    }
+}
+
+/// Multiply-add: fused where the target has FMA, plain otherwise (a fused
+/// `mul_add` without hardware FMA is a slow library call).
+pub(crate) trait MulAdd {
+    fn mul_add(a: f32, b: f32, c: f32) -> f32;
+}
+
+/// Hardware FMA.
+pub(crate) struct Fused;
+/// Separate multiply and add.
+pub(crate) struct Plain;
+
+impl MulAdd for Fused {
+    #[inline(always)]
+    fn mul_add(a: f32, b: f32, c: f32) -> f32 {
+        a.mul_add(b, c)
+    }
+}
+
+impl MulAdd for Plain {
+    #[inline(always)]
+    fn mul_add(a: f32, b: f32, c: f32) -> f32 {
+        a * b + c
+    }
+}
+
+/// Channel counts the kernels are compiled for.
+pub(crate) const SUPPORTED_CHANNELS: [usize; 6] = [8, 16, 32, 64, 128, 256];
+
+/// A convolution with batch norm folded in, weights reordered to
+/// `[k³][in][out]` (tap-major, output channels innermost).
+#[derive(Clone, Debug)]
+pub(crate) struct FoldedConv {
+    pub w: Vec<f32>,
+    pub b: Vec<f32>,
+    pub cin: usize,
+    pub cout: usize,
+    pub k: usize,
+    pub stride: usize,
+    pub pad: usize,
+}
+
+impl FoldedConv {
+    /// Folds `bn(conv(x))` into one convolution `conv'(x)`.
+    pub(crate) fn new(c: &ConvWeights, bn: &BatchNormWeights) -> FoldedConv {
+        let (scale, shift) = bn.affine();
+        let k3 = c.kernel * c.kernel * c.kernel;
+        let (cin, cout) = (c.in_channels, c.out_channels);
+        let mut w = vec![0.0f32; k3 * cin * cout];
+        for co in 0..cout {
+            for ci in 0..cin {
+                for tap in 0..k3 {
+                    w[(tap * cin + ci) * cout + co] =
+                        c.weight[(co * cin + ci) * k3 + tap] * scale[co];
+                }
+            }
+        }
+        let b = (0..cout)
+            .map(|co| c.bias.as_ref().map_or(0.0, |b| b[co]) * scale[co] + shift[co])
+            .collect();
+        FoldedConv {
+            w,
+            b,
+            cin,
+            cout,
+            k: c.kernel,
+            stride: c.stride,
+            pad: c.padding,
+        }
+    }
+
+    /// Output side for an input of side `n`.
+    pub(crate) fn output_side(&self, n: usize) -> usize {
+        (n + 2 * self.pad).saturating_sub(self.k) / self.stride + 1
+    }
+
+    /// `out = [relu](conv(input) [+ out])`.
+    ///
+    /// `input`: `[n, n, n, cin]` channels-last; `out`: `[m, m, m, cout]` with
+    /// `m = output_side(n)`. With `accumulate`, the convolution is added to
+    /// what `out` holds (the residual sum).
+    pub(crate) fn run(
+        &self,
+        level: Level,
+        input: &[f32],
+        n: usize,
+        out: &mut [f32],
+        accumulate: bool,
+        relu: bool,
+    ) {
+        let m = self.output_side(n);
+        debug_assert_eq!(input.len(), n * n * n * self.cin);
+        debug_assert_eq!(out.len(), m * m * m * self.cout);
+        // S independent accumulators per output cube hide the FMA latency:
+        // about eight vector chains in flight whatever the channel count.
+        macro_rules! go {
+            ($co:literal, $s:literal) => {
+                match level {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `Level::detect` found the features at run time.
+                    Level::Avx512 => unsafe {
+                        dense_avx512::<$co, $s>(self, input, n, out, m, accumulate, relu)
+                    },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    Level::Avx2 => unsafe {
+                        dense_avx2::<$co, $s>(self, input, n, out, m, accumulate, relu)
+                    },
+                    _ => dense::<$co, $s, Plain>(self, input, n, out, m, accumulate, relu),
+                }
+            };
+        }
+        match self.cout {
+            8 => go!(8, 8),
+            16 => go!(16, 8),
+            32 => go!(32, 4),
+            64 => go!(64, 2),
+            128 => go!(128, 1),
+            256 => go!(256, 1),
+            c => unreachable!("channel count {c} rejected by Cnn::new"),
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn dense_avx512<const CO: usize, const S: usize>(
+    c: &FoldedConv,
+    input: &[f32],
+    n: usize,
+    out: &mut [f32],
+    m: usize,
+    acc: bool,
+    relu: bool,
+) {
+    dense::<CO, S, Fused>(c, input, n, out, m, acc, relu)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn dense_avx2<const CO: usize, const S: usize>(
+    c: &FoldedConv,
+    input: &[f32],
+    n: usize,
+    out: &mut [f32],
+    m: usize,
+    acc: bool,
+    relu: bool,
+) {
+    dense::<CO, S, Fused>(c, input, n, out, m, acc, relu)
+}
+
+/// Valid kernel offsets along one axis for output coordinate `o`:
+/// `kk` with `0 <= o·s + kk − p < n`.
+#[inline(always)]
+fn taps(o: usize, s: usize, p: usize, k: usize, n: usize) -> std::ops::Range<usize> {
+    let start = o * s;
+    let lo = p.saturating_sub(start);
+    let hi = (n + p).saturating_sub(start).min(k);
+    lo..hi.max(lo)
+}
+
+#[inline(always)]
+fn dense<const CO: usize, const S: usize, F: MulAdd>(
+    c: &FoldedConv,
+    input: &[f32],
+    n: usize,
+    out: &mut [f32],
+    m: usize,
+    accumulate: bool,
+    relu: bool,
+) {
+    let (cin, k, s, p) = (c.cin, c.k, c.stride, c.pad);
+    let bias: [f32; CO] = c.b[..CO].try_into().expect("bias length");
+    for od in 0..m {
+        let rd = taps(od, s, p, k, n);
+        for oh in 0..m {
+            let rh = taps(oh, s, p, k, n);
+            for ow in 0..m {
+                let rw = taps(ow, s, p, k, n);
+                let o = (od * m + oh) * m + ow;
+                let dst: &mut [f32; CO] =
+                    (&mut out[o * CO..o * CO + CO]).try_into().expect("out row");
+                let mut accs = [[0.0f32; CO]; S];
+                for kd in rd.clone() {
+                    let id = od * s + kd - p;
+                    for kh in rh.clone() {
+                        let ih = oh * s + kh - p;
+                        for kw in rw.clone() {
+                            let iw = ow * s + kw - p;
+                            let i = (id * n + ih) * n + iw;
+                            let x = &input[i * cin..i * cin + cin];
+                            let tap = (kd * k + kh) * k + kw;
+                            let wt = &c.w[tap * cin * CO..(tap + 1) * cin * CO];
+                            let mut xs = x.chunks_exact(S);
+                            let mut ws = wt.chunks_exact(S * CO);
+                            for (xc, wc) in (&mut xs).zip(&mut ws) {
+                                for u in 0..S {
+                                    let xv = xc[u];
+                                    let wr: &[f32; CO] =
+                                        wc[u * CO..u * CO + CO].try_into().expect("weight row");
+                                    for j in 0..CO {
+                                        accs[u][j] = F::mul_add(xv, wr[j], accs[u][j]);
+                                    }
+                                }
+                            }
+                            for (u, (&xv, wr)) in xs
+                                .remainder()
+                                .iter()
+                                .zip(ws.remainder().chunks_exact(CO))
+                                .enumerate()
+                            {
+                                for j in 0..CO {
+                                    accs[u][j] = F::mul_add(xv, wr[j], accs[u][j]);
+                                }
+                            }
+                        }
+                    }
+                }
+                let mut acc = bias;
+                if accumulate {
+                    for j in 0..CO {
+                        acc[j] += dst[j];
+                    }
+                }
+                for a in &accs {
+                    for j in 0..CO {
+                        acc[j] += a[j];
+                    }
+                }
+                if relu {
+                    for v in acc.iter_mut() {
+                        *v = v.max(0.0);
+                    }
+                }
+                *dst = acc;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::taps;
+
+    #[test]
+    fn taps_clip_at_borders() {
+        // n = 5, k = 3, s = 1, p = 1
+        assert_eq!(taps(0, 1, 1, 3, 5), 1..3);
+        assert_eq!(taps(2, 1, 1, 3, 5), 0..3);
+        assert_eq!(taps(4, 1, 1, 3, 5), 0..2);
+        // stride 2, n = 21 → m = 11: last output reads 19..21, i.e. kk 0..2
+        assert_eq!(taps(10, 2, 1, 3, 21), 0..2);
+        // 1³ stride 2, no padding
+        assert_eq!(taps(10, 2, 0, 1, 21), 0..1);
+    }
+}

@@ -1,0 +1,24 @@
+//! Burn-free f32 CPU inference of the NormalNet CNN (SPEC §6).
+//!
+//! Training stays in `normalnet-net` (burn); this crate runs a trained network
+//! fast on the CPU, with no deep-learning stack: batch norm is folded into the
+//! preceding convolution or linear layer, the first 5³ convolution scatters
+//! only the occupied voxels (a face neighbourhood is a surface sheet: a few %
+//! of the grid), and the dense 3³ convolutions run channels-last with the
+//! output channels held in registers, compiled for AVX-512 / AVX2+FMA and
+//! chosen at run time. Samples of a batch run in parallel (rayon), each one
+//! start to finish on one thread, so results do not depend on the thread count.
+//!
+//! Data flow: `normalnet-net` exports a trained model as [`NetWeights`] (plain
+//! arrays in burn's layouts), [`Cnn::new`] compiles them, [`Cnn::forward`]
+//! maps `[3, D, H, W]` grids from `normalnet-voxel` to 18 outputs per face.
+
+mod conv;
+mod error;
+mod network;
+mod sparse_conv;
+mod weights;
+
+pub use error::CnnError;
+pub use network::Cnn;
+pub use weights::{BatchNormWeights, BlockWeights, ConvWeights, LinearWeights, NetWeights};

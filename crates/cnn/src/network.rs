@@ -1,0 +1,313 @@
+//! `Cnn`: a compiled network — folded layers, forward pass over a batch.
+
+use crate::conv::{FoldedConv, Level, SUPPORTED_CHANNELS};
+use crate::error::CnnError;
+use crate::sparse_conv::Occupied;
+use crate::weights::{BatchNormWeights, LinearWeights, NetWeights};
+use rayon::prelude::*;
+
+/// A linear layer with batch norm folded in, `[in][out]` weights.
+#[derive(Clone, Debug)]
+struct FoldedLinear {
+    w: Vec<f32>,
+    b: Vec<f32>,
+    inputs: usize,
+    outputs: usize,
+}
+
+impl FoldedLinear {
+    fn new(l: &LinearWeights, bn: Option<&BatchNormWeights>) -> FoldedLinear {
+        let (scale, shift) = match bn {
+            Some(bn) => bn.affine(),
+            None => (vec![1.0; l.out_features], vec![0.0; l.out_features]),
+        };
+        let (ni, no) = (l.in_features, l.out_features);
+        let mut w = l.weight.clone();
+        for i in 0..ni {
+            for o in 0..no {
+                w[i * no + o] *= scale[o];
+            }
+        }
+        let b = (0..no)
+            .map(|o| l.bias.as_ref().map_or(0.0, |b| b[o]) * scale[o] + shift[o])
+            .collect();
+        FoldedLinear {
+            w,
+            b,
+            inputs: ni,
+            outputs: no,
+        }
+    }
+
+    fn run(&self, x: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(&self.b);
+        for (i, &xv) in x.iter().enumerate() {
+            if xv != 0.0 {
+                let row = &self.w[i * self.outputs..(i + 1) * self.outputs];
+                for (o, &w) in out.iter_mut().zip(row) {
+                    *o += xv * w;
+                }
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+struct Block {
+    a: FoldedConv,
+    b: FoldedConv,
+    shortcut: FoldedConv,
+    /// input side
+    n: usize,
+    /// output side
+    m: usize,
+}
+
+/// A trained NormalNet network compiled for fast CPU inference.
+#[derive(Clone, Debug)]
+pub struct Cnn {
+    grid: usize,
+    stem: FoldedConv,
+    stem_side: usize,
+    blocks: Vec<Block>,
+    hidden: Vec<FoldedLinear>,
+    output: FoldedLinear,
+    level: Level,
+    largest: usize,
+}
+
+/// Per-thread buffers of one forward pass.
+struct Scratch {
+    occupied: Occupied,
+    x: Vec<f32>,
+    t: Vec<f32>,
+    y: Vec<f32>,
+    v: Vec<f32>,
+    w: Vec<f32>,
+}
+
+impl Cnn {
+    /// Compiles `weights`: checks shapes, folds batch norm, reorders weights.
+    ///
+    /// # Errors
+    /// [`CnnError`] naming the layer whose shapes do not fit, or a channel
+    /// count the kernels are not compiled for (8, 16, 32, 64, 128, 256).
+    pub fn new(weights: &NetWeights) -> Result<Cnn, CnnError> {
+        let mismatch = |layer: &str, message: String| CnnError::Mismatch {
+            layer: layer.to_string(),
+            message,
+        };
+        let supported = |layer: &str, c: usize| {
+            if SUPPORTED_CHANNELS.contains(&c) {
+                Ok(())
+            } else {
+                Err(mismatch(
+                    layer,
+                    format!("{c} output channels (supported: {SUPPORTED_CHANNELS:?})"),
+                ))
+            }
+        };
+        weights.stem.check("stem")?;
+        weights.stem_bn.check("stem", weights.stem.out_channels)?;
+        if weights.stem.in_channels != 3 || weights.stem.stride != 1 {
+            return Err(mismatch(
+                "stem",
+                "expected 3 input channels and stride 1".into(),
+            ));
+        }
+        supported("stem", weights.stem.out_channels)?;
+        let stem = FoldedConv::new(&weights.stem, &weights.stem_bn);
+        let stem_side = stem.output_side(weights.grid);
+        let mut largest = stem_side.pow(3) * stem.cout;
+        let (mut n, mut c) = (stem_side, stem.cout);
+        let mut blocks = Vec::new();
+        for (i, bw) in weights.blocks.iter().enumerate() {
+            let name = format!("block {}", i + 1);
+            for (conv, bn, what) in [
+                (&bw.conv_a, &bw.bn_a, "conv_a"),
+                (&bw.conv_b, &bw.bn_b, "conv_b"),
+                (&bw.shortcut, &bw.bn_shortcut, "shortcut"),
+            ] {
+                let layer = format!("{name} {what}");
+                conv.check(&layer)?;
+                bn.check(&layer, conv.out_channels)?;
+                supported(&layer, conv.out_channels)?;
+            }
+            if bw.conv_a.in_channels != c || bw.shortcut.in_channels != c {
+                return Err(mismatch(
+                    &name,
+                    format!(
+                        "expects {} input channels, previous layer gives {c}",
+                        bw.conv_a.in_channels
+                    ),
+                ));
+            }
+            let m = bw.conv_a.output_side(n);
+            let cout = bw.conv_a.out_channels;
+            if bw.conv_b.in_channels != cout
+                || bw.conv_b.out_channels != cout
+                || bw.shortcut.out_channels != cout
+                || bw.conv_b.output_side(m) != m
+                || bw.shortcut.output_side(n) != m
+            {
+                return Err(mismatch(
+                    &name,
+                    "conv_b / shortcut shapes do not match conv_a".into(),
+                ));
+            }
+            blocks.push(Block {
+                a: FoldedConv::new(&bw.conv_a, &bw.bn_a),
+                b: FoldedConv::new(&bw.conv_b, &bw.bn_b),
+                shortcut: FoldedConv::new(&bw.shortcut, &bw.bn_shortcut),
+                n,
+                m,
+            });
+            largest = largest.max(m.pow(3) * cout);
+            n = m;
+            c = cout;
+        }
+        let mut hidden = Vec::new();
+        let mut width = c;
+        for (i, (l, bn)) in weights.hidden.iter().enumerate() {
+            let layer = format!("hidden {}", i + 1);
+            l.check(&layer)?;
+            bn.check(&layer, l.out_features)?;
+            if l.in_features != width {
+                return Err(mismatch(
+                    &layer,
+                    format!(
+                        "expects {} inputs, previous layer gives {width}",
+                        l.in_features
+                    ),
+                ));
+            }
+            hidden.push(FoldedLinear::new(l, Some(bn)));
+            width = l.out_features;
+            largest = largest.max(width);
+        }
+        weights.output.check("output")?;
+        if weights.output.in_features != width {
+            return Err(mismatch(
+                "output",
+                format!(
+                    "expects {} inputs, previous layer gives {width}",
+                    weights.output.in_features
+                ),
+            ));
+        }
+        let output = FoldedLinear::new(&weights.output, None);
+        Ok(Cnn {
+            grid: weights.grid,
+            stem,
+            stem_side,
+            blocks,
+            hidden,
+            output,
+            level: Level::detect(),
+            largest,
+        })
+    }
+
+    /// Length of one input grid, `3 · D · H · W`.
+    pub fn grid_len(&self) -> usize {
+        3 * self.grid.pow(3)
+    }
+
+    /// Number of outputs per sample (18 for six μ_g).
+    pub fn outputs(&self) -> usize {
+        self.output.outputs
+    }
+
+    /// Which instruction set the kernels use on this machine.
+    pub fn instruction_set(&self) -> &'static str {
+        match self.level {
+            Level::Avx512 => "avx512",
+            Level::Avx2 => "avx2+fma",
+            Level::Scalar => "scalar",
+        }
+    }
+
+    /// Runs the network on a batch.
+    ///
+    /// # Shapes
+    /// - `grids`: `[batch, 3, D, H, W]` flat, channel-major per sample
+    /// - `out`: `[batch, outputs]` flat, after tanh
+    ///
+    /// # Errors
+    /// [`CnnError::BufferSize`] when the buffers do not hold whole samples of
+    /// the same batch size.
+    pub fn forward(&self, grids: &[f32], out: &mut [f32]) -> Result<(), CnnError> {
+        let g = self.grid_len();
+        let no = self.outputs();
+        if grids.len() % g != 0 || out.len() != grids.len() / g * no {
+            return Err(CnnError::BufferSize {
+                what: "output batch",
+                actual: out.len(),
+                expected: grids.len() / g * no,
+            });
+        }
+        grids
+            .par_chunks(g)
+            .zip(out.par_chunks_mut(no))
+            .for_each_init(
+                || self.scratch(),
+                |s, (grid, o)| self.forward_one(grid, s, o),
+            );
+        Ok(())
+    }
+
+    fn scratch(&self) -> Scratch {
+        Scratch {
+            occupied: Occupied::default(),
+            x: vec![0.0; self.largest],
+            t: vec![0.0; self.largest],
+            y: vec![0.0; self.largest],
+            v: vec![0.0; self.largest],
+            w: vec![0.0; self.largest],
+        }
+    }
+
+    fn forward_one(&self, grid: &[f32], s: &mut Scratch, out: &mut [f32]) {
+        let lv = self.level;
+        s.occupied.gather(grid, 3);
+        let mut n = self.stem_side;
+        let mut c = self.stem.cout;
+        self.stem
+            .run_sparse(lv, &s.occupied, self.grid, &mut s.x[..n * n * n * c]);
+        for b in &self.blocks {
+            let (m, co) = (b.m, b.a.cout);
+            let x = &s.x[..n * n * n * c];
+            let y = &mut s.y[..m * m * m * co];
+            b.shortcut.run(lv, x, n, y, false, false);
+            let t = &mut s.t[..m * m * m * co];
+            b.a.run(lv, x, n, t, false, true);
+            b.b.run(lv, t, m, y, true, true);
+            std::mem::swap(&mut s.x, &mut s.y);
+            n = m;
+            c = co;
+        }
+        // global max pool over cubes
+        let x = &s.x[..n * n * n * c];
+        let pooled = &mut s.v[..c];
+        pooled.fill(f32::NEG_INFINITY);
+        for row in x.chunks_exact(c) {
+            for (p, &v) in pooled.iter_mut().zip(row) {
+                *p = p.max(v);
+            }
+        }
+        let mut width = c;
+        for l in &self.hidden {
+            let (input, output) = (&s.v[..width], &mut s.w[..l.outputs]);
+            l.run(input, output);
+            for v in output.iter_mut() {
+                *v = v.max(0.0);
+            }
+            std::mem::swap(&mut s.v, &mut s.w);
+            width = l.outputs;
+        }
+        self.output.run(&s.v[..width], out);
+        for v in out.iter_mut() {
+            *v = v.tanh();
+        }
+    }
+}

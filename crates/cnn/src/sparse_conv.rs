@@ -1,0 +1,156 @@
+//! The first convolution as a scatter over occupied voxels. A face
+//! neighbourhood grid is a surface sheet: only a few % of its cubes are
+//! non-zero, so instead of gathering `k³` taps for every output cube, each
+//! occupied input cube adds its contribution to the `k³` outputs it reaches.
+//! Stride 1 only (the stem of SPEC §6).
+
+use crate::conv::{FoldedConv, Fused, Level, MulAdd, Plain};
+
+/// Occupied cubes of a `[cin, n, n, n]` channel-major grid: flat cube indices
+/// and their `cin` values, channels-last.
+#[derive(Default)]
+pub(crate) struct Occupied {
+    pub index: Vec<u32>,
+    pub values: Vec<f32>,
+}
+
+impl Occupied {
+    /// Collects the cubes of `grid` with any non-zero channel.
+    pub(crate) fn gather(&mut self, grid: &[f32], cin: usize) {
+        self.index.clear();
+        self.values.clear();
+        let cubes = grid.len() / cin;
+        for i in 0..cubes {
+            if (0..cin).any(|c| grid[c * cubes + i] != 0.0) {
+                self.index.push(i as u32);
+                self.values.extend((0..cin).map(|c| grid[c * cubes + i]));
+            }
+        }
+    }
+}
+
+impl FoldedConv {
+    /// `out = relu(conv(grid))` for stride 1, scattering the occupied cubes.
+    /// `out`: `[m, m, m, cout]` channels-last, `m = output_side(n)`.
+    pub(crate) fn run_sparse(&self, level: Level, occupied: &Occupied, n: usize, out: &mut [f32]) {
+        debug_assert_eq!(self.stride, 1);
+        let m = self.output_side(n);
+        debug_assert_eq!(out.len(), m * m * m * self.cout);
+        macro_rules! go {
+            ($co:literal) => {
+                match level {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `Level::detect` found the features at run time.
+                    Level::Avx512 => unsafe { scatter_avx512::<$co>(self, occupied, n, out, m) },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    Level::Avx2 => unsafe { scatter_avx2::<$co>(self, occupied, n, out, m) },
+                    _ => scatter::<$co, Plain>(self, occupied, n, out, m),
+                }
+            };
+        }
+        match self.cout {
+            8 => go!(8),
+            16 => go!(16),
+            32 => go!(32),
+            64 => go!(64),
+            128 => go!(128),
+            256 => go!(256),
+            c => unreachable!("channel count {c} rejected by Cnn::new"),
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn scatter_avx512<const CO: usize>(
+    c: &FoldedConv,
+    occ: &Occupied,
+    n: usize,
+    out: &mut [f32],
+    m: usize,
+) {
+    scatter::<CO, Fused>(c, occ, n, out, m)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn scatter_avx2<const CO: usize>(
+    c: &FoldedConv,
+    occ: &Occupied,
+    n: usize,
+    out: &mut [f32],
+    m: usize,
+) {
+    scatter::<CO, Fused>(c, occ, n, out, m)
+}
+
+/// Output coordinates `o = i + p − kk` inside `[0, m)`, as the kernel offsets `kk`.
+#[inline(always)]
+fn reach(i: usize, p: usize, k: usize, m: usize) -> std::ops::Range<usize> {
+    // o = i + p - kk >= 0  <=>  kk <= i + p ;  o < m  <=>  kk > i + p - m
+    let lo = (i + p + 1).saturating_sub(m);
+    let hi = (i + p + 1).min(k);
+    lo..hi.max(lo)
+}
+
+#[inline(always)]
+fn scatter<const CO: usize, F: MulAdd>(
+    c: &FoldedConv,
+    occ: &Occupied,
+    n: usize,
+    out: &mut [f32],
+    m: usize,
+) {
+    let (cin, k, p) = (c.cin, c.k, c.pad);
+    let bias: [f32; CO] = c.b[..CO].try_into().expect("bias length");
+    for row in out.chunks_exact_mut(CO) {
+        row.copy_from_slice(&bias);
+    }
+    for (slot, &i) in occ.index.iter().enumerate() {
+        let v = &occ.values[slot * cin..slot * cin + cin];
+        let i = i as usize;
+        let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
+        for kd in reach(id, p, k, m) {
+            let od = id + p - kd;
+            for kh in reach(ih, p, k, m) {
+                let oh = ih + p - kh;
+                for kw in reach(iw, p, k, m) {
+                    let ow = iw + p - kw;
+                    let tap = (kd * k + kh) * k + kw;
+                    let wt = &c.w[tap * cin * CO..(tap + 1) * cin * CO];
+                    let mut acc = [0.0f32; CO];
+                    for (ci, &x) in v.iter().enumerate() {
+                        let wr: &[f32; CO] =
+                            wt[ci * CO..ci * CO + CO].try_into().expect("weight row");
+                        for j in 0..CO {
+                            acc[j] = F::mul_add(x, wr[j], acc[j]);
+                        }
+                    }
+                    let o = (od * m + oh) * m + ow;
+                    let dst: &mut [f32; CO] =
+                        (&mut out[o * CO..o * CO + CO]).try_into().expect("out row");
+                    for j in 0..CO {
+                        dst[j] += acc[j];
+                    }
+                }
+            }
+        }
+    }
+    for v in out.iter_mut() {
+        *v = v.max(0.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::reach;
+
+    #[test]
+    fn reach_clips_at_borders() {
+        // n = m = 21, k = 5, p = 2: input 0 reaches outputs 0..=2 via kk 2..=0
+        assert_eq!(reach(0, 2, 5, 21), 0..3);
+        assert_eq!(reach(10, 2, 5, 21), 0..5);
+        assert_eq!(reach(20, 2, 5, 21), 2..5);
+    }
+}
