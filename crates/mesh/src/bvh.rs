@@ -222,14 +222,26 @@ impl TriangleBvh {
     /// The exact closest point of the surface to `p` (`None` without
     /// triangles). Ties keep the first triangle met.
     pub fn closest(&self, p: Vec3) -> Option<Closest> {
+        self.closest_from(
+            p,
+            Closest {
+                dist2: f64::INFINITY,
+                face: u32::MAX,
+                point: [f64::NAN; 3],
+            },
+        )
+    }
+
+    /// [`closest`](Self::closest) starting from a known candidate (for
+    /// example the distance to a triangle incident to the query's own vertex):
+    /// a tight start prunes most of the tree. The answer is the same as
+    /// `closest(p)` whenever `start` is a true point-triangle distance of
+    /// this mesh (ties go to the smallest face index either way).
+    pub fn closest_from(&self, p: Vec3, start: Closest) -> Option<Closest> {
         if self.ids.is_empty() {
             return None;
         }
-        let mut best = Closest {
-            dist2: f64::INFINITY,
-            face: u32::MAX,
-            point: [f64::NAN; 3],
-        };
+        let mut best = start;
         let mut stack: Vec<(f64, u32)> = Vec::with_capacity(64);
         stack.push((box_dist2(p, self.nodes[0].lo, self.nodes[0].hi), 0));
         while let Some((d, ni)) = stack.pop() {
@@ -352,6 +364,16 @@ mod tests {
                     .fold(f64::INFINITY, f64::min);
                 let got = bvh.closest(p).unwrap();
                 assert_eq!(got.dist2, brute, "nv {nv} nf {nf} p {p:?}");
+                // Any true candidate as a start gives the same answer.
+                let h = rng.random_range(0..nf);
+                let [a, b, c] = m.corners(h);
+                let q = closest_point_on_triangle(p, a, b, c);
+                let start = Closest {
+                    dist2: vec3::dist2(q, p),
+                    face: h as u32,
+                    point: q,
+                };
+                assert_eq!(bvh.closest_from(p, start).unwrap(), got);
                 let [a, b, c] = m.corners(got.face as usize);
                 assert_eq!(
                     vec3::dist2(closest_point_on_triangle(p, a, b, c), p),

@@ -18,7 +18,7 @@
 //! Per-vertex distances are computed in parallel; every sum is sequential in
 //! index order, so the numbers do not depend on the thread count.
 
-use crate::bvh::TriangleBvh;
+use crate::bvh::{Closest, TriangleBvh, closest_point_on_triangle};
 use crate::error::MeshError;
 use crate::geometry::{face_areas, face_normals, mean_edge_length};
 use crate::mesh::Mesh;
@@ -150,37 +150,16 @@ pub fn compare_with_progress(
     let median_angle_deg = median(deg);
     progress.advance(1);
 
-    // Distances result -> GT at the result vertices used by faces.
-    let used_r = used_vertices(result);
+    // Distances result -> GT at the result vertices used by faces, then
+    // GT -> result. Same face count: face `f` of the other mesh is a good
+    // first guess for the vertices of face `f` (same answer, less search).
     let used_g = used_vertices(gt);
     let bvh_g = TriangleBvh::new(gt);
     let bvh_r = TriangleBvh::new(result);
     progress.advance(1);
-    let d: Vec<f64> = result
-        .positions
-        .par_iter()
-        .zip(used_r.par_iter())
-        .map(|(&p, &u)| {
-            if u {
-                bvh_g.closest(p).map_or(0.0, |c| c.dist2.sqrt())
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let d = hinted_distances(result, gt, &bvh_g);
     progress.advance(1);
-    let dg: Vec<f64> = gt
-        .positions
-        .par_iter()
-        .zip(used_g.par_iter())
-        .map(|(&p, &u)| {
-            if u {
-                bvh_r.closest(p).map_or(0.0, |c| c.dist2.sqrt())
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let dg = hinted_distances(gt, result, &bvh_r);
     progress.advance(1);
 
     let areas = face_areas(result);
@@ -226,6 +205,35 @@ pub fn compare_with_progress(
         n_faces_result: result.num_faces(),
         faces_identical: gt.faces == result.faces,
     })
+}
+
+/// Distance of every vertex of `from` used by a face to the surface of `to`
+/// (0 for unused vertices), starting each search at the face of `to` with the
+/// index of the vertex's first face in `from` (same face counts).
+fn hinted_distances(from: &Mesh, to: &Mesh, bvh: &TriangleBvh) -> Vec<f64> {
+    let mut first = vec![u32::MAX; from.num_vertices()];
+    for (f, t) in from.faces.iter().enumerate().rev() {
+        for &v in t {
+            first[v as usize] = f as u32;
+        }
+    }
+    from.positions
+        .par_iter()
+        .zip(first.par_iter())
+        .map(|(&p, &f)| {
+            if f == u32::MAX {
+                return 0.0;
+            }
+            let [a, b, c] = to.corners(f as usize);
+            let q = closest_point_on_triangle(p, a, b, c);
+            let start = Closest {
+                dist2: vec3::dist2(q, p),
+                face: f,
+                point: q,
+            };
+            bvh.closest_from(p, start).map_or(0.0, |c| c.dist2.sqrt())
+        })
+        .collect()
 }
 
 /// Exact distances from `points` to the surface of `mesh`, in parallel.
