@@ -73,10 +73,12 @@ fn main() {
             method.denoise(&noisy, &NoProgress).expect("denoise")
         };
         let secs = t0.elapsed().as_secs_f64();
+        let m = normalnet_mesh::metrics::compare(&clean, &out).expect("metrics");
         println!(
-            "{model:20} {name:6} noisy E_a {:6.2}  E_a {:6.3}  time {secs:.3} s",
+            "{model:20} {name:6} noisy E_a {:6.2}  E_a {:6.3}  E_v/l_e {:.4}  time {secs:.3} s",
             mean_angle_degrees(&noisy, &clean),
-            mean_angle_degrees(&out, &clean)
+            mean_angle_degrees(&out, &clean),
+            m.e_v_over_le
         );
     }
 }

@@ -13,7 +13,7 @@
 //! reproduce the reference figure on Fandisk0.3 (E_a 3.49°); the centre
 //! face's own term and the schedule are parameters (see [`BnfParams`]).
 
-use crate::driver::{NormalFilter, Schedule, run_filter};
+use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
 use normalnet_mesh::geometry::mean_centre_distance;
 use normalnet_mesh::vec3::{self, Vec3};
@@ -35,6 +35,9 @@ pub struct BnfParams {
     /// Whether face i's own term (weight a_i) is part of its sum; default
     /// false (N(i) is the ring without the face, as in the reference code).
     pub include_centre: bool,
+    /// Keep boundary vertices fixed during vertex updates; default true (as
+    /// the reference code's BNF).
+    pub fix_boundary: bool,
     /// When vertices move; default [`Schedule::NormalsThenVertices`] (the
     /// reference code's local scheme: all normal passes on the input
     /// geometry, then the vertex passes).
@@ -50,6 +53,7 @@ impl Default for BnfParams {
             vertex_iterations: 10,
             include_centre: false,
             schedule: Schedule::NormalsThenVertices,
+            fix_boundary: true,
         }
     }
 }
@@ -134,9 +138,12 @@ pub fn bnf(mesh: &Mesh, params: &BnfParams, progress: &dyn Progress) -> Result<M
         &mut filter,
         mesh,
         &topology,
-        params.normal_iterations,
-        params.vertex_iterations,
-        params.schedule,
+        Passes {
+            normal_iterations: params.normal_iterations,
+            vertex_iterations: params.vertex_iterations,
+            schedule: params.schedule,
+            fix_boundary: params.fix_boundary,
+        },
         "BNF",
         progress,
     ))

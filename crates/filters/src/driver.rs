@@ -11,7 +11,7 @@
 //!   local scheme): `N_f` passes on the input geometry, each reading the
 //!   previous pass's normals, then `N_v` vertex passes once.
 
-use crate::vertex_update::{VertexUpdateBuffers, vertex_update_in_place};
+use crate::vertex_update::{VertexUpdateBuffers, vertex_update_in_place_fixed};
 use normalnet_mesh::vec3::Vec3;
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 
@@ -40,19 +40,37 @@ pub enum Schedule {
     NormalsThenVertices,
 }
 
-/// Runs `filter` on `mesh`: `normal_iterations` (N_f) normal passes and
-/// `vertex_iterations` (N_v) vertex passes arranged by `schedule`. Reports
-/// one progress unit per normal pass.
+/// How [`run_filter`] arranges the passes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Passes {
+    /// N_f: normal-filtering passes
+    pub normal_iterations: usize,
+    /// N_v: vertex-update passes (per normal pass when interleaved)
+    pub vertex_iterations: usize,
+    /// when vertices move
+    pub schedule: Schedule,
+    /// keep boundary vertices in place
+    pub fix_boundary: bool,
+}
+
+/// Runs `filter` on `mesh` with the passes of `passes`. Reports one progress
+/// unit per normal pass under `label`.
 pub fn run_filter(
     filter: &mut dyn NormalFilter,
     mesh: &Mesh,
     topology: &Topology,
-    normal_iterations: usize,
-    vertex_iterations: usize,
-    schedule: Schedule,
+    passes: Passes,
     label: &str,
     progress: &dyn Progress,
 ) -> Mesh {
+    let Passes {
+        normal_iterations,
+        vertex_iterations,
+        schedule,
+        fix_boundary,
+    } = passes;
+    let boundary = fix_boundary.then(|| topology.boundary_vertices());
+    let fixed = boundary.as_deref();
     let n_faces = mesh.num_faces();
     let mut positions = mesh.positions.clone();
     let mut geometry = FaceGeometry::new(mesh);
@@ -68,12 +86,13 @@ pub fn run_filter(
                     geometry.update(&current);
                 }
                 filter.pass(topology, &geometry, &geometry.normals, &mut filtered);
-                vertex_update_in_place(
+                vertex_update_in_place_fixed(
                     &mut positions,
                     &mesh.faces,
                     topology,
                     &filtered,
                     vertex_iterations,
+                    fixed,
                     &mut buffers,
                 );
                 progress.advance(1);
@@ -86,12 +105,13 @@ pub fn run_filter(
                 std::mem::swap(&mut previous, &mut filtered);
                 progress.advance(1);
             }
-            vertex_update_in_place(
+            vertex_update_in_place_fixed(
                 &mut positions,
                 &mesh.faces,
                 topology,
                 &previous,
                 vertex_iterations,
+                fixed,
                 &mut buffers,
             );
         }

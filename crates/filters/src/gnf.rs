@@ -27,7 +27,7 @@
 //! When the mesh has no edge-adjacent face pair (`d_s = 0`) a pass returns
 //! the input normals unchanged instead of dividing by zero.
 
-use crate::driver::{NormalFilter, Schedule, run_filter};
+use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
 use normalnet_mesh::geometry::{face_centres, mean_centre_distance};
 use normalnet_mesh::vec3::{self, Vec3};
@@ -310,9 +310,12 @@ pub fn gnf(mesh: &Mesh, params: &GnfParams, progress: &dyn Progress) -> Result<M
         &mut filter,
         mesh,
         &topology,
-        params.normal_iterations,
-        params.vertex_iterations,
-        Schedule::Interleaved,
+        Passes {
+            normal_iterations: params.normal_iterations,
+            vertex_iterations: params.vertex_iterations,
+            schedule: Schedule::Interleaved,
+            fix_boundary: false,
+        },
         "GNF",
         progress,
     ))

@@ -20,14 +20,16 @@ pub mod sun07;
 pub mod vertex_update;
 
 pub use bilateral::{Bnf, BnfParams, bnf};
-pub use driver::{NormalFilter, Schedule, run_filter};
+pub use driver::{NormalFilter, Passes, Schedule, run_filter};
 pub use error::FilterError;
 pub use gnf::{Gnf, GnfParams, gnf};
 pub use gt_guided::{
     GT_GUIDED_SIGMA_S, GtGuidedGnfParams, gt_guided_gnf, gt_guided_normals, try_gt_guided_normals,
 };
 pub use sun07::{Sun07, Sun07Params, sun07};
-pub use vertex_update::{VertexUpdateBuffers, vertex_update, vertex_update_in_place};
+pub use vertex_update::{
+    VertexUpdateBuffers, vertex_update, vertex_update_in_place, vertex_update_in_place_fixed,
+};
 
 use normalnet_mesh::{Mesh, Progress};
 

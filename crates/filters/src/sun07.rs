@@ -11,7 +11,7 @@
 //! (GuidedDenoising's `FastAndEffectiveFeaturePreservingMeshDenoising`):
 //! `T = 0.5`, 20 normal passes, 50 vertex passes.
 
-use crate::driver::{NormalFilter, Schedule, run_filter};
+use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
@@ -29,6 +29,9 @@ pub struct Sun07Params {
     pub vertex_iterations: usize,
     /// Whether face i itself is in N(i) (weight `(1 − T)²`); default true.
     pub include_centre: bool,
+    /// Keep boundary vertices fixed during vertex updates; default true (as
+    /// the reference code's Sun07).
+    pub fix_boundary: bool,
     /// When vertices move; default [`Schedule::NormalsThenVertices`] (the paper).
     pub schedule: Schedule,
 }
@@ -41,6 +44,7 @@ impl Default for Sun07Params {
             vertex_iterations: 50,
             include_centre: true,
             schedule: Schedule::NormalsThenVertices,
+            fix_boundary: true,
         }
     }
 }
@@ -113,9 +117,12 @@ pub fn sun07(
         &mut filter,
         mesh,
         &topology,
-        params.normal_iterations,
-        params.vertex_iterations,
-        params.schedule,
+        Passes {
+            normal_iterations: params.normal_iterations,
+            vertex_iterations: params.vertex_iterations,
+            schedule: params.schedule,
+            fix_boundary: params.fix_boundary,
+        },
         "Sun07",
         progress,
     ))

@@ -8,8 +8,9 @@
 //! (Jacobi style: all vertices read the previous pass). Vertices without faces
 //! stay where they are; a zero filtered normal (degenerate face) contributes
 //! nothing but still counts in `|F(i)|`, as in the reference code.
-//! Boundary vertices move like the others (GuidedDenoising's GNF calls its
-//! `updateVertexPosition` with `fixed_boundary = false`).
+//! Boundary vertices move like the others unless the caller fixes them
+//! ([`vertex_update_in_place_fixed`]): GuidedDenoising's GNF moves them, its
+//! BNF keeps them fixed.
 //!
 //! Used by every classical filter of this crate and by NormalNet's inference.
 
@@ -64,6 +65,28 @@ pub fn vertex_update_in_place(
     iterations: usize,
     buffers: &mut VertexUpdateBuffers,
 ) {
+    vertex_update_in_place_fixed(
+        positions, faces, topology, normals, iterations, None, buffers,
+    );
+}
+
+/// [`vertex_update_in_place`] where vertices flagged in `fixed` (len #V, e.g.
+/// `Topology::boundary_vertices()`) keep their positions.
+///
+/// # Panics
+/// As [`vertex_update_in_place`], or if `fixed` has the wrong length.
+pub fn vertex_update_in_place_fixed(
+    positions: &mut Vec<Vec3>,
+    faces: &[[u32; 3]],
+    topology: &Topology,
+    normals: &[Vec3],
+    iterations: usize,
+    fixed: Option<&[bool]>,
+    buffers: &mut VertexUpdateBuffers,
+) {
+    if let Some(fixed) = fixed {
+        assert_eq!(fixed.len(), positions.len(), "one flag per vertex");
+    }
     assert_eq!(normals.len(), faces.len(), "one filtered normal per face");
     assert_eq!(
         topology.num_faces(),
@@ -99,7 +122,7 @@ pub fn vertex_update_in_place(
             .for_each(|(i, out)| {
                 let x_i = p[i];
                 let row = topology.vertex_faces.row(i);
-                if row.is_empty() {
+                if row.is_empty() || fixed.is_some_and(|fx| fx[i]) {
                     *out = x_i;
                     return;
                 }
@@ -165,6 +188,30 @@ mod tests {
         for p in &out.positions {
             assert!((p[2] - z0).abs() < 1e-6, "{p:?}");
         }
+    }
+
+    #[test]
+    fn fixed_vertices_do_not_move() {
+        let m = Mesh::new(
+            vec![
+                [0.0, 0.0, 0.3],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [-1.0, 0.0, 0.0],
+                [0.0, -1.0, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]],
+        )
+        .unwrap();
+        let t = Topology::new(5, &m.faces);
+        let fixed = t.boundary_vertices();
+        assert_eq!(fixed, vec![false, true, true, true, true]);
+        let mut p = m.positions.clone();
+        let normals = vec![[0.0, 0.0, 1.0]; 4];
+        let mut b = VertexUpdateBuffers::default();
+        vertex_update_in_place_fixed(&mut p, &m.faces, &t, &normals, 100, Some(&fixed), &mut b);
+        assert_eq!(&p[1..], &m.positions[1..]);
+        assert!(p[0][2].abs() < 1e-9, "{:?}", p[0]);
     }
 
     #[test]
