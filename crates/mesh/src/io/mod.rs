@@ -195,6 +195,16 @@ pub fn write_atomically(
         body(&mut w).map_err(io)?;
         w.flush().map_err(io)?;
     }
+    // tempfile creates 0600 files: give the result the permissions of the
+    // file it replaces, or the usual 0644 for a new file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let perm = std::fs::metadata(path)
+            .map(|m| m.permissions())
+            .unwrap_or_else(|_| std::fs::Permissions::from_mode(0o644));
+        tmp.as_file().set_permissions(perm).map_err(io)?;
+    }
     tmp.persist(path).map_err(|e| io(e.error))?;
     Ok(())
 }
