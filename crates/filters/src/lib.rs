@@ -16,6 +16,7 @@ pub mod driver;
 pub mod error;
 pub mod gnf;
 pub mod gt_guided;
+pub mod l0;
 pub mod sun07;
 pub mod vertex_update;
 
@@ -26,6 +27,7 @@ pub use gnf::{Gnf, GnfParams, gnf};
 pub use gt_guided::{
     GT_GUIDED_SIGMA_S, GtGuidedGnfParams, gt_guided_gnf, gt_guided_normals, try_gt_guided_normals,
 };
+pub use l0::{L0Params, l0};
 pub use sun07::{Sun07, Sun07Params, sun07};
 pub use vertex_update::{
     VertexUpdateBuffers, vertex_update, vertex_update_in_place, vertex_update_in_place_fixed,
@@ -43,11 +45,13 @@ pub enum Method {
     Bnf(BnfParams),
     /// Fast and effective feature-preserving denoising (Sun et al. 2007).
     Sun07(Sun07Params),
+    /// L0 minimisation, edge-based with area regulariser (He & Schaefer 2013).
+    L0(L0Params),
 }
 
 impl Method {
     /// Names accepted by [`Method::from_name`], in display order.
-    pub const NAMES: &'static [&'static str] = &["gnf", "bnf", "sun07"];
+    pub const NAMES: &'static [&'static str] = &["gnf", "bnf", "sun07", "l0"];
 
     /// The method called `name` (case-insensitive) with its default
     /// parameters.
@@ -56,6 +60,7 @@ impl Method {
             "gnf" => Ok(Method::Gnf(GnfParams::default())),
             "bnf" => Ok(Method::Bnf(BnfParams::default())),
             "sun07" => Ok(Method::Sun07(Sun07Params::default())),
+            "l0" => Ok(Method::L0(L0Params::default())),
             _ => Err(FilterError::UnknownMethod(name.to_string())),
         }
     }
@@ -66,6 +71,7 @@ impl Method {
             Method::Gnf(_) => "gnf",
             Method::Bnf(_) => "bnf",
             Method::Sun07(_) => "sun07",
+            Method::L0(_) => "l0",
         }
     }
 
@@ -75,6 +81,7 @@ impl Method {
             Method::Gnf(p) => p.validate(),
             Method::Bnf(p) => p.validate(),
             Method::Sun07(p) => p.validate(),
+            Method::L0(p) => p.validate(),
         }
     }
 
@@ -84,6 +91,7 @@ impl Method {
             Method::Gnf(p) => gnf(mesh, p, progress),
             Method::Bnf(p) => bnf(mesh, p, progress),
             Method::Sun07(p) => sun07(mesh, p, progress),
+            Method::L0(p) => l0(mesh, p, progress),
         }
     }
 }
