@@ -12,6 +12,7 @@ pub mod loader;
 pub mod params;
 pub mod sampler;
 pub mod samples;
+pub mod shapes;
 pub mod tri_box_overlap;
 pub mod voxelizer;
 

@@ -1,0 +1,338 @@
+//! Coarse polyhedral builders: 2D profiles, ear clipping, lofts (rings of a
+//! profile stacked along y, capped), and the icosahedron.
+
+use super::edit::EditMesh;
+use super::surface::Surface;
+use normalnet_mesh::vec3::Vec3;
+use std::f64::consts::TAU;
+
+/// A closed 2D polygon in the (x, z) plane, counter-clockwise (positive
+/// signed area), no repeated points.
+pub type Profile = Vec<[f64; 2]>;
+
+/// Signed area of a 2D polygon.
+pub fn signed_area(p: &[[f64; 2]]) -> f64 {
+    let n = p.len();
+    (0..n)
+        .map(|i| p[i][0] * p[(i + 1) % n][1] - p[(i + 1) % n][0] * p[i][1])
+        .sum::<f64>()
+        * 0.5
+}
+
+/// Makes the polygon counter-clockwise.
+pub fn ccw(mut p: Profile) -> Profile {
+    if signed_area(&p) < 0.0 {
+        p.reverse();
+    }
+    p
+}
+
+/// Axis-aligned rectangle `w × d` centred at the origin.
+pub fn rect(w: f64, d: f64) -> Profile {
+    ccw(vec![
+        [-w / 2.0, -d / 2.0],
+        [w / 2.0, -d / 2.0],
+        [w / 2.0, d / 2.0],
+        [-w / 2.0, d / 2.0],
+    ])
+}
+
+/// Regular `n`-gon of circumradius `r`, rotated by `phase`.
+pub fn ngon(n: usize, r: f64, phase: f64) -> Profile {
+    ccw((0..n)
+        .map(|i| {
+            let t = phase + TAU * i as f64 / n as f64;
+            [r * t.cos(), r * t.sin()]
+        })
+        .collect())
+}
+
+/// Star with `n` tips: radii alternate `r_out`, `r_in`.
+pub fn star(n: usize, r_out: f64, r_in: f64, phase: f64) -> Profile {
+    ccw((0..2 * n)
+        .map(|i| {
+            let t = phase + TAU * i as f64 / (2 * n) as f64;
+            let r = if i % 2 == 0 { r_out } else { r_in };
+            [r * t.cos(), r * t.sin()]
+        })
+        .collect())
+}
+
+/// Rectangle `w × d` with its corners cut by `c` (a chamfered rectangle).
+pub fn chamfered_rect(w: f64, d: f64, c: f64) -> Profile {
+    let (x, z) = (w / 2.0, d / 2.0);
+    ccw(vec![
+        [-x + c, -z],
+        [x - c, -z],
+        [x, -z + c],
+        [x, z - c],
+        [x - c, z],
+        [-x + c, z],
+        [-x, z - c],
+        [-x, -z + c],
+    ])
+}
+
+/// Rectangle `w × d` with corners rounded to radius `r` (`k` segments each).
+pub fn rounded_rect(w: f64, d: f64, r: f64, k: usize) -> Profile {
+    let (x, z) = (w / 2.0 - r, d / 2.0 - r);
+    let mut p = Vec::new();
+    for (q, (cx, cz)) in [(x, -z), (x, z), (-x, z), (-x, -z)].into_iter().enumerate() {
+        let start = -TAU / 4.0 + q as f64 * TAU / 4.0;
+        for i in 0..=k {
+            let t = start + TAU / 4.0 * i as f64 / k as f64;
+            p.push([cx + r * t.cos(), cz + r * t.sin()]);
+        }
+    }
+    ccw(p)
+}
+
+/// An L shape in the unit square (arm width `a`).
+pub fn l_shape(a: f64) -> Profile {
+    ccw(vec![
+        [-0.5, -0.5],
+        [0.5, -0.5],
+        [0.5, -0.5 + a],
+        [-0.5 + a, -0.5 + a],
+        [-0.5 + a, 0.5],
+        [-0.5, 0.5],
+    ])
+}
+
+/// A cross (plus sign) with arm half-width `a` in the unit square.
+pub fn cross_shape(a: f64) -> Profile {
+    ccw(vec![
+        [-a, -0.5],
+        [a, -0.5],
+        [a, -a],
+        [0.5, -a],
+        [0.5, a],
+        [a, a],
+        [a, 0.5],
+        [-a, 0.5],
+        [-a, a],
+        [-0.5, a],
+        [-0.5, -a],
+        [-a, -a],
+    ])
+}
+
+/// A `w × d` rectangle with rectangular notches cut into its +z side:
+/// each `(centre x, width, depth)`, non-overlapping, inside the side.
+pub fn notched_rect(w: f64, d: f64, notches: &[(f64, f64, f64)]) -> Profile {
+    let (x, z) = (w / 2.0, d / 2.0);
+    let mut p = vec![[-x, -z], [x, -z], [x, z]];
+    let mut ns = notches.to_vec();
+    ns.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (cx, nw, nd) in ns {
+        p.push([cx + nw / 2.0, z]);
+        p.push([cx + nw / 2.0, z - nd]);
+        p.push([cx - nw / 2.0, z - nd]);
+        p.push([cx - nw / 2.0, z]);
+    }
+    p.push([-x, z]);
+    ccw(p)
+}
+
+/// Inserts points along each polygon edge so no segment is longer than `s`.
+pub fn resample(p: &[[f64; 2]], s: f64) -> Profile {
+    let mut out = Vec::new();
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let k = (l / s).ceil().max(1.0) as usize;
+        for j in 0..k {
+            let t = j as f64 / k as f64;
+            out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+        }
+    }
+    out
+}
+
+/// Ear clipping of a simple counter-clockwise polygon: triangles as index
+/// triples, counter-clockwise. O(n²)–O(n³), for coarse polygons.
+pub fn ear_clip(p: &[[f64; 2]]) -> Vec<[usize; 3]> {
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut idx: Vec<usize> = (0..p.len()).collect();
+    let mut tris = Vec::new();
+    while idx.len() > 3 {
+        let n = idx.len();
+        // Best ear: convex, no other vertex inside, largest minimum angle proxy.
+        let mut best: Option<(usize, f64)> = None;
+        for i in 0..n {
+            let (a, b, c) = (p[idx[(i + n - 1) % n]], p[idx[i]], p[idx[(i + 1) % n]]);
+            let area = cross(a, b, c);
+            if area <= 1e-14 {
+                continue;
+            }
+            let inside = idx.iter().any(|&j| {
+                let q = p[j];
+                q != a
+                    && q != b
+                    && q != c
+                    && cross(a, b, q) >= 0.0
+                    && cross(b, c, q) >= 0.0
+                    && cross(c, a, q) >= 0.0
+            });
+            if inside {
+                continue;
+            }
+            let l2 = |u: [f64; 2], v: [f64; 2]| (u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2);
+            let quality = area / (l2(a, b) + l2(b, c) + l2(c, a));
+            if best.is_none_or(|(_, q)| quality > q) {
+                best = Some((i, quality));
+            }
+        }
+        let Some((i, _)) = best else {
+            // Numerically stuck (collinear remainder): clip any vertex.
+            let i = 0;
+            tris.push([idx[(i + n - 1) % n], idx[i], idx[(i + 1) % n]]);
+            idx.remove(i);
+            continue;
+        };
+        tris.push([idx[(i + n - 1) % n], idx[i], idx[(i + 1) % n]]);
+        idx.remove(i);
+    }
+    tris.push([idx[0], idx[1], idx[2]]);
+    tris
+}
+
+/// One ring of a loft: the profile's points placed in 3D.
+pub struct Ring {
+    /// 3D points, same count and order as the profile
+    pub points: Vec<Vec3>,
+    /// tag of the band from this ring to the next (ignored on the last)
+    pub band: u16,
+}
+
+/// Stacks `rings` (same point count, counter-clockwise seen from +y,
+/// increasing y) into a closed solid: bands of quads between consecutive
+/// rings, the first ring capped by a planar cap (tag 0), the last either
+/// by a cap with tag `top` (its points lifted by `lift`) or, when `apex` is
+/// given, by a fan to that point.
+pub fn loft(
+    m: &mut EditMesh,
+    rings: &[Ring],
+    profile: &[[f64; 2]],
+    top: u16,
+    apex: Option<Vec3>,
+    lift: impl Fn(Vec3) -> Vec3,
+) {
+    let n = profile.len();
+    let ids: Vec<Vec<u32>> = rings
+        .iter()
+        .map(|r| r.points.iter().map(|&p| m.add_vertex(p)).collect())
+        .collect();
+    for k in 0..rings.len() - 1 {
+        let (a, b) = (&ids[k], &ids[k + 1]);
+        for i in 0..n {
+            let j = (i + 1) % n;
+            // Outward for counter-clockwise (x, z) rings with y up: (x, z, y)
+            // is left-handed, so the band runs a_j → a_i → b_i.
+            m.add_face([a[j], a[i], b[i]], rings[k].band);
+            m.add_face([a[j], b[i], b[j]], rings[k].band);
+        }
+    }
+    let tris = ear_clip(profile);
+    let bottom = &ids[0];
+    for t in &tris {
+        m.add_face([bottom[t[0]], bottom[t[1]], bottom[t[2]]], 0);
+    }
+    let last = ids.last().unwrap();
+    match apex {
+        Some(p) => {
+            let c = m.add_vertex(p);
+            for i in 0..n {
+                m.add_face([last[(i + 1) % n], last[i], c], rings.last().unwrap().band);
+            }
+        }
+        None => {
+            for &v in last {
+                m.positions[v as usize] = lift(m.positions[v as usize]);
+            }
+            for t in &tris {
+                m.add_face([last[t[0]], last[t[2]], last[t[1]]], top);
+            }
+        }
+    }
+}
+
+/// A ring of `profile` scaled by `s` about `(cx, cz)` at height `y`.
+pub fn ring(profile: &[[f64; 2]], s: f64, centre: [f64; 2], y: f64, band: u16) -> Ring {
+    Ring {
+        points: profile
+            .iter()
+            .map(|q| {
+                [
+                    centre[0] + s * (q[0] - centre[0]),
+                    y,
+                    centre[1] + s * (q[1] - centre[1]),
+                ]
+            })
+            .collect(),
+        band,
+    }
+}
+
+/// The icosahedron inscribed in the unit sphere, counter-clockwise faces.
+pub fn icosahedron(m: &mut EditMesh, tag: u16) {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let raw = [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ];
+    let base = m.positions.len() as u32;
+    for p in raw {
+        let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        m.add_vertex([p[0] / l, p[1] / l, p[2] / l]);
+    }
+    let faces = [
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for f in faces {
+        m.add_face(f.map(|v: u32| v + base), tag);
+    }
+}
+
+/// Convenience for the [`Surface::Cone`] of a ring pair.
+pub fn cone_surface(centre: [f64; 2], y0: f64, r0: f64, y1: f64, r1: f64) -> Surface {
+    Surface::Cone {
+        cx: centre[0],
+        cz: centre[1],
+        y0,
+        r0,
+        y1,
+        r1,
+    }
+}
