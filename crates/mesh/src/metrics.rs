@@ -113,8 +113,13 @@ fn check_counts(gt: &Mesh, result: &Mesh) -> Result<(), MeshError> {
 
 /// All metrics of `result` against `gt` (see the module docs).
 ///
+/// A result of zero total area (every face degenerate) has no area weights:
+/// `E_v` and the mean distance then weight its used vertices equally.
+///
 /// # Errors
-/// [`MeshError::Mismatch`] when the face counts differ.
+/// [`MeshError::Mismatch`] when the face counts differ;
+/// [`MeshError::InvalidParameter`] when the ground truth has zero mean edge
+/// length or a zero bounding box (nothing to measure against).
 pub fn compare(gt: &Mesh, result: &Mesh) -> Result<Metrics, MeshError> {
     compare_with_progress(gt, result, &NoProgress)
 }
@@ -175,12 +180,28 @@ pub fn compare_with_progress(
         s2 += wi * di * di;
         s1 += wi * di;
     }
-    let e_v = (s2 / (3.0 * tot)).sqrt();
-    let mean_dist = s1 / (3.0 * tot);
+    let (e_v, mean_dist) = if tot > 0.0 {
+        ((s2 / (3.0 * tot)).sqrt(), s1 / (3.0 * tot))
+    } else {
+        // Zero total result area: the area weights are all zero, so fall back
+        // to equal weights over the used result vertices rather than 0/0.
+        let used = d.len() - count_unused(result);
+        let (s2, s1) = d.iter().fold((0.0, 0.0), |(a, b), x| (a + x * x, b + x));
+        ((s2 / used as f64).sqrt(), s1 / used as f64)
+    };
     let max_r = d.iter().copied().fold(0.0, f64::max);
     let max_g = dg.iter().copied().fold(0.0, f64::max);
     let le = mean_edge_length(gt, &Topology::new(gt.num_vertices(), &gt.faces));
     let diag = bbox_diag(gt, &used_g);
+    if !(le > 0.0 && diag > 0.0) {
+        return Err(MeshError::InvalidParameter {
+            name: "ground truth",
+            message: format!(
+                "degenerate ground truth (mean edge length {le}, bounding-box diagonal {diag}): \
+                 E_v / l_e is undefined"
+            ),
+        });
+    }
     progress.finish();
     Ok(Metrics {
         e_a_deg,
@@ -239,6 +260,11 @@ fn hinted_distances(from: &Mesh, to: &Mesh, bvh: &TriangleBvh) -> Vec<f64> {
 /// Exact distances from `points` to the surface of `mesh`, in parallel.
 pub fn point_surface_distances(points: &[Vec3], mesh: &Mesh) -> Vec<f64> {
     TriangleBvh::new(mesh).distances(points)
+}
+
+/// Number of vertices of `m` used by no face.
+fn count_unused(m: &Mesh) -> usize {
+    used_vertices(m).iter().filter(|u| !**u).count()
 }
 
 fn used_vertices(m: &Mesh) -> Vec<bool> {
@@ -349,6 +375,18 @@ mod tests {
             "{e}"
         );
         assert!(per_face_angle_errors(&m, &small).is_err());
+    }
+
+    #[test]
+    fn collapsed_result_and_degenerate_gt_give_numbers_or_errors_not_nan() {
+        let m = tetra();
+        let collapsed = m.with_positions(vec![[0.0; 3]; 4]);
+        let r = compare(&m, &collapsed).unwrap();
+        assert!(r.e_v.is_finite() && r.e_v == 0.0, "{}", r.e_v); // (0,0,0) lies on the GT
+        assert_eq!(r.e_a_deg, 90.0);
+        assert!(r.max_dist_gt_to_result > 0.0);
+        let e = compare(&collapsed, &m).unwrap_err().to_string();
+        assert!(e.contains("degenerate ground truth"), "{e}");
     }
 
     #[test]
