@@ -1,10 +1,698 @@
-//! `normalnet bench` (not built yet).
+//! `normalnet bench`: runs methods over noisy/clean pairs (`MODEL/Noisy.obj`
+//! + `MODEL/Original.obj`) and writes the comparison in the layout of the
+//! paper's Table 3 (`table.md`), plus `results.csv`, `results.json`,
+//! `index.html` and, with `--render`, one picture per model with the noisy
+//! input, every method and the ground truth side by side, coloured by angular
+//! error (SPEC §3 metrics, SPEC §7 NormalNet settings per model).
+//!
+//! Settings come from a TOML file (`configs/bench.toml`): for each method,
+//! `[defaults.METHOD]` then `[models."MODEL".METHOD]` override the method's
+//! own defaults key by key; keys are the fields of the method's params struct
+//! (`normalnet_filters::GnfParams`, ...) or, for `normalnet`, `iterations`,
+//! `vertex_iterations`, `mu_g` and `model`. `[models."MODEL"] view = [az, el]`
+//! sets the camera of that model's picture. A failing method is reported as a
+//! failed cell and the bench goes on.
+
+use crate::commands::denoise_normalnet::{self, NormalnetOptions};
+use crate::commands::render::{parse_size, parse_view};
+use crate::progress::Bar;
+use anyhow::{Context, bail};
+use normalnet_filters::Method;
+use normalnet_mesh::metrics::{Metrics, compare, per_face_angle_errors};
+use normalnet_mesh::{Mesh, read_mesh};
+use normalnet_render::report::{BenchReport, NOISY, RunRecord, split_model_name, write_report};
+use normalnet_render::{
+    ColourBar, Image, RenderOptions, append_colour_bar, compose_grid, draw_lines, error_colors,
+    nice_error_scale, render,
+};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The settings shipped with the repository (used when `--settings` is not
+/// given and `configs/bench.toml` is not in the working directory).
+const BUILTIN_SETTINGS: &str = include_str!("../../../../configs/bench.toml");
+
+/// The NormalNet method's name in `--methods`.
+const NORMALNET: &str = "normalnet";
 
 /// Arguments of `normalnet bench`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Folder with one sub-folder per model holding Noisy.obj and Original.obj.
+    #[arg(long, default_value = "../shared/data/gd")]
+    pub data: PathBuf,
+    /// Methods, comma-separated: normalnet and the classical ones (see `normalnet denoise --help`).
+    /// Default: normalnet and every classical method.
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Vec<String>,
+    /// Models (sub-folder names), comma-separated. Default: every folder with a pair.
+    #[arg(long, value_delimiter = ',')]
+    pub models: Vec<String>,
+    /// Per-model settings (TOML). Default: ./configs/bench.toml if present, else the built-in copy.
+    #[arg(long)]
+    pub settings: Option<PathBuf>,
+    /// Output folder (created if needed).
+    #[arg(long, short)]
+    pub out: PathBuf,
+    /// Also write one PNG per model: noisy / each method / ground truth, coloured by error.
+    #[arg(long)]
+    pub render: bool,
+    /// Size of one picture panel, WIDTHxHEIGHT.
+    #[arg(long, default_value = "480x360", value_parser = parse_size)]
+    pub panel_size: (u32, u32),
+    /// Camera AZIMUTH,ELEVATION for the pictures (a model's `view` in the settings wins).
+    #[arg(long, default_value = "30,20", value_parser = parse_view, allow_hyphen_values = true)]
+    pub view: (f64, f64),
+    /// Also save every result mesh as OUT/MODEL/METHOD.obj.
+    #[arg(long)]
+    pub save_meshes: bool,
+}
+
+/// Parsed settings file.
+#[derive(Debug, Default)]
+pub struct Settings {
+    source: String,
+    defaults: toml::Table,
+    models: toml::Table,
+}
+
+impl Settings {
+    /// Parses settings text; `source` names it in errors.
+    pub fn parse(text: &str, source: &str) -> anyhow::Result<Settings> {
+        let mut table: toml::Table = text
+            .parse()
+            .with_context(|| format!("{source}: invalid TOML"))?;
+        let take = |table: &mut toml::Table, key: &str| -> anyhow::Result<toml::Table> {
+            match table.remove(key) {
+                None => Ok(toml::Table::new()),
+                Some(toml::Value::Table(t)) => Ok(t),
+                Some(_) => bail!("{source}: `{key}` must be a table"),
+            }
+        };
+        let defaults = take(&mut table, "defaults")?;
+        let models = take(&mut table, "models")?;
+        if let Some(key) = table.keys().next() {
+            bail!(
+                "{source}: unknown top-level key `{key}` (expected [defaults.METHOD] or [models.\"MODEL\".METHOD])"
+            );
+        }
+        let known = |m: &str| m == NORMALNET || Method::from_name(m).is_ok();
+        for (method, v) in &defaults {
+            if !known(method) {
+                bail!("{source}: [defaults.{method}]: unknown method `{method}`");
+            }
+            if !v.is_table() {
+                bail!("{source}: [defaults.{method}] must be a table");
+            }
+        }
+        for (model, v) in &models {
+            let Some(t) = v.as_table() else {
+                bail!("{source}: [models.\"{model}\"] must be a table");
+            };
+            for (key, v) in t {
+                if key == "view" {
+                    view_from_toml(v)
+                        .with_context(|| format!("{source}: [models.\"{model}\"] view"))?;
+                } else if !known(key) {
+                    bail!("{source}: [models.\"{model}\"]: unknown method `{key}`");
+                } else if !v.is_table() {
+                    bail!("{source}: [models.\"{model}\".{key}] must be a table");
+                }
+            }
+        }
+        Ok(Settings {
+            source: source.to_string(),
+            defaults,
+            models,
+        })
+    }
+
+    /// Loads `path`, or `./configs/bench.toml`, or the built-in copy.
+    pub fn load(path: Option<&Path>) -> anyhow::Result<Settings> {
+        match path {
+            Some(p) => {
+                let text = std::fs::read_to_string(p)
+                    .with_context(|| format!("reading settings {}", p.display()))?;
+                Settings::parse(&text, &p.display().to_string())
+            }
+            None => {
+                let local = Path::new("configs/bench.toml");
+                if local.is_file() {
+                    Settings::load(Some(local))
+                } else {
+                    Settings::parse(BUILTIN_SETTINGS, "built-in configs/bench.toml")
+                }
+            }
+        }
+    }
+
+    /// The overrides for `method` on `model`: defaults, then the model's own,
+    /// each with where it came from (for error messages).
+    fn overrides(&self, model: &str, method: &str) -> Vec<(String, toml::Table)> {
+        let mut out = Vec::new();
+        if let Some(t) = self.defaults.get(method).and_then(|v| v.as_table()) {
+            out.push((format!("{}: [defaults.{method}]", self.source), t.clone()));
+        }
+        if let Some(t) = self
+            .models
+            .get(model)
+            .and_then(|m| m.get(method))
+            .and_then(|v| v.as_table())
+        {
+            out.push((
+                format!("{}: [models.\"{model}\".{method}]", self.source),
+                t.clone(),
+            ));
+        }
+        out
+    }
+
+    /// The picture camera of `model`, if the settings give one.
+    fn view(&self, model: &str) -> Option<(f64, f64)> {
+        self.models
+            .get(model)
+            .and_then(|m| m.get("view"))
+            .and_then(|v| view_from_toml(v).ok())
+    }
+
+    /// The classical `method` for `model` with its settings applied, and a
+    /// one-line description of its parameters.
+    pub fn classical(&self, model: &str, name: &str) -> anyhow::Result<(Method, String)> {
+        let method = Method::from_name(name)?;
+        let mut value = serde_json::to_value(&method)?;
+        // externally tagged: {"Gnf": {field: value, ...}}
+        let params = value
+            .as_object_mut()
+            .and_then(|o| o.values_mut().next())
+            .and_then(|v| v.as_object_mut())
+            .with_context(|| format!("method {name}: parameters are not a struct"))?;
+        for (source, table) in self.overrides(model, name) {
+            for (key, v) in table {
+                if !params.contains_key(&key) {
+                    let known: Vec<&String> = params.keys().collect();
+                    bail!("{source}: unknown key `{key}` for {name} (known: {known:?})");
+                }
+                params.insert(key, serde_json::to_value(v)?);
+            }
+        }
+        let described = describe(params);
+        let method: Method = serde_json::from_value(value)
+            .with_context(|| format!("settings for {name} on {model}"))?;
+        method
+            .validate()
+            .with_context(|| format!("settings for {name} on {model}"))?;
+        Ok((method, described))
+    }
+
+    /// NormalNet options for `model` and their description.
+    pub fn normalnet(&self, model: &str) -> anyhow::Result<(NormalnetOptions, String)> {
+        let mut options = NormalnetOptions::default();
+        for (source, table) in self.overrides(model, NORMALNET) {
+            for (key, v) in table {
+                let bad = || format!("{source}: `{key}` has the wrong type ({v})");
+                match key.as_str() {
+                    "iterations" => {
+                        options.iterations =
+                            Some(v.as_integer().filter(|i| *i > 0).with_context(bad)? as usize)
+                    }
+                    "vertex_iterations" => {
+                        options.vertex_iterations =
+                            Some(v.as_integer().filter(|i| *i >= 0).with_context(bad)? as usize)
+                    }
+                    "mu_g" => {
+                        options.mu_g = Some(
+                            v.as_float()
+                                .or_else(|| v.as_integer().map(|i| i as f64))
+                                .with_context(bad)?,
+                        )
+                    }
+                    "model" => options.model = Some(PathBuf::from(v.as_str().with_context(bad)?)),
+                    _ => bail!(
+                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model)"
+                    ),
+                }
+            }
+        }
+        let mut parts = vec![
+            format!(
+                "N_f={}",
+                options
+                    .iterations
+                    .map_or("default".into(), |v| v.to_string())
+            ),
+            format!(
+                "N_v={}",
+                options
+                    .vertex_iterations
+                    .map_or("default".into(), |v| v.to_string())
+            ),
+            format!(
+                "mu_g={}",
+                options.mu_g.map_or("default".into(), |v| v.to_string())
+            ),
+        ];
+        if let Some(m) = &options.model {
+            parts.push(format!("model={}", m.display()));
+        }
+        Ok((options, parts.join(" ")))
+    }
+}
+
+fn view_from_toml(v: &toml::Value) -> anyhow::Result<(f64, f64)> {
+    let a = v
+        .as_array()
+        .filter(|a| a.len() == 2)
+        .context("expected [azimuth, elevation]")?;
+    let num = |x: &toml::Value| x.as_float().or_else(|| x.as_integer().map(|i| i as f64));
+    let az = num(&a[0]).context("azimuth must be a number")?;
+    let el = num(&a[1]).context("elevation must be a number")?;
+    if !az.is_finite() || !(-90.0..=90.0).contains(&el) {
+        bail!("elevation must be within -90..=90, got {el}");
+    }
+    Ok((az, el))
+}
+
+/// `key=value` pairs of a params object, in key order.
+fn describe(params: &serde_json::Map<String, Value>) -> String {
+    params
+        .iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Folders under `data` holding `Noisy.obj` and `Original.obj`, sorted.
+fn discover_models(data: &Path) -> anyhow::Result<Vec<String>> {
+    let entries = std::fs::read_dir(data)
+        .with_context(|| format!("reading data folder {}", data.display()))?;
+    let mut models: Vec<String> = entries
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().join("Noisy.obj").is_file() && e.path().join("Original.obj").is_file())
+        .filter_map(|e| e.file_name().to_str().map(str::to_string))
+        .collect();
+    models.sort();
+    Ok(models)
+}
+
+/// Runs a closure, turning a panic into an error so one method cannot stop the bench.
+fn guarded<T>(what: &str, f: impl FnOnce() -> anyhow::Result<T>) -> anyhow::Result<T> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(r) => r,
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            bail!("{what} panicked: {msg}")
+        }
+    }
+}
+
+fn record_from(
+    model: &str,
+    method: &str,
+    params: String,
+    m: &Metrics,
+    denoise_s: Option<f64>,
+    total_s: f64,
+) -> RunRecord {
+    RunRecord {
+        model: model.to_string(),
+        noise: split_model_name(model).1,
+        method: method.to_string(),
+        params,
+        e_a_deg: Some(m.e_a_deg),
+        e_v: Some(m.e_v),
+        e_v_over_le: Some(m.e_v_over_le),
+        hausdorff: Some(m.hausdorff),
+        denoise_seconds: denoise_s,
+        total_seconds: Some(total_s),
+        error: None,
+    }
+}
+
+fn failed(
+    model: &str,
+    method: &str,
+    params: String,
+    error: &anyhow::Error,
+    total_s: f64,
+) -> RunRecord {
+    RunRecord {
+        model: model.to_string(),
+        noise: split_model_name(model).1,
+        method: method.to_string(),
+        params,
+        total_seconds: Some(total_s),
+        error: Some(format!("{error:#}")),
+        ..Default::default()
+    }
+}
+
+/// One panel of a model's picture.
+struct Panel {
+    label: String,
+    mesh: Mesh,
+    errors: Option<Vec<f64>>,
+}
+
+/// Renders the panels of one model side by side with a shared camera (the
+/// ground truth's box) and error scale, a title and a colour bar.
+fn model_picture(
+    model: &str,
+    panels: &[Panel],
+    gt: &Mesh,
+    args: &Args,
+    view: (f64, f64),
+) -> anyhow::Result<Image> {
+    // the scale follows the methods' errors (the noisy input would wash them out)
+    let method_errors: Vec<f64> = panels
+        .iter()
+        .filter(|p| p.label.split('\n').next() != Some(NOISY))
+        .filter_map(|p| p.errors.as_ref())
+        .flatten()
+        .copied()
+        .collect();
+    let max = if method_errors.is_empty() {
+        let all: Vec<f64> = panels
+            .iter()
+            .filter_map(|p| p.errors.as_ref())
+            .flatten()
+            .copied()
+            .collect();
+        nice_error_scale(&all)
+    } else {
+        nice_error_scale(&method_errors)
+    };
+    let base = RenderOptions {
+        width: args.panel_size.0,
+        height: args.panel_size.1,
+        azimuth_deg: view.0,
+        elevation_deg: view.1,
+        supersample: 2,
+        bounds: Some(gt.bounding_box()),
+        ..Default::default()
+    };
+    let mut images = Vec::with_capacity(panels.len());
+    let mut labels = Vec::with_capacity(panels.len());
+    for p in panels {
+        let options = RenderOptions {
+            face_colors: p.errors.as_ref().map(|e| error_colors(e, max)),
+            ..base.clone()
+        };
+        images.push(
+            render(&p.mesh, &options).with_context(|| format!("rendering {model} {}", p.label))?,
+        );
+        labels.push(p.label.clone());
+    }
+    let cols = if images.len() <= 4 {
+        images.len()
+    } else {
+        images.len().div_ceil(2)
+    };
+    let grid = compose_grid(&images, cols, &labels);
+    let bar = ColourBar::for_height(max, grid.height().min(2 * args.panel_size.1), "error (deg)");
+    let body = append_colour_bar(&grid, &bar);
+    let scale = (body.width() / 800).clamp(1, 3);
+    let title_h = 8 * scale + 16;
+    let mut out = Image::new(body.width(), body.height() + title_h, [255, 255, 255]);
+    draw_lines(
+        &mut out,
+        8,
+        8,
+        &[format!(
+            "{model}: faces coloured by angle to ground-truth normals"
+        )],
+        scale,
+    );
+    out.blit(&body, 0, title_h as i64);
+    Ok(out)
+}
 
 /// Runs `normalnet bench`.
-pub fn run(_args: Args, _quiet: bool) -> anyhow::Result<()> {
-    anyhow::bail!("`normalnet bench` is not implemented yet")
+pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let settings = Settings::load(args.settings.as_deref())?;
+    let methods: Vec<String> = if args.methods.is_empty() {
+        std::iter::once(NORMALNET.to_string())
+            .chain(Method::NAMES.iter().map(|s| s.to_string()))
+            .collect()
+    } else {
+        args.methods
+            .iter()
+            .map(|m| m.trim().to_ascii_lowercase())
+            .collect()
+    };
+    for m in &methods {
+        if m != NORMALNET && Method::from_name(m).is_err() {
+            bail!(
+                "unknown method `{m}` (known: {NORMALNET}, {})",
+                Method::NAMES.join(", ")
+            );
+        }
+    }
+    let models = if args.models.is_empty() {
+        discover_models(&args.data)?
+    } else {
+        args.models.iter().map(|m| m.trim().to_string()).collect()
+    };
+    if models.is_empty() {
+        bail!(
+            "no model folders with Noisy.obj and Original.obj under {}",
+            args.data.display()
+        );
+    }
+    for m in &models {
+        let dir = args.data.join(m);
+        for f in ["Noisy.obj", "Original.obj"] {
+            if !dir.join(f).is_file() {
+                bail!("{}: missing {f}", dir.display());
+            }
+        }
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+
+    let mut report = BenchReport {
+        title: "normalnet bench: E_a and E_v on noisy/clean pairs".into(),
+        models: models.clone(),
+        methods: methods.clone(),
+        ..Default::default()
+    };
+    report.notes.push(format!("data: {}", args.data.display()));
+    report.notes.push(format!("settings: {}", settings.source));
+    report
+        .notes
+        .push(format!("threads: {}", rayon::current_num_threads()));
+    let total_runs = models.len() * methods.len();
+    let mut run_index = 0;
+    for model in &models {
+        let dir = args.data.join(model);
+        let load_start = Instant::now();
+        let loaded = (|| -> anyhow::Result<(Mesh, Mesh)> {
+            Ok((
+                read_mesh(dir.join("Noisy.obj"))?,
+                read_mesh(dir.join("Original.obj"))?,
+            ))
+        })();
+        let (noisy, gt) = match loaded {
+            Ok(pair) => pair,
+            Err(e) => {
+                let secs = load_start.elapsed().as_secs_f64();
+                report
+                    .records
+                    .push(failed(model, NOISY, String::new(), &e, secs));
+                for m in &methods {
+                    report
+                        .records
+                        .push(failed(model, m, String::new(), &e, 0.0));
+                }
+                run_index += methods.len();
+                continue;
+            }
+        };
+        let mut panels = Vec::new();
+        match compare(&gt, &noisy) {
+            Ok(m) => {
+                report.records.push(record_from(
+                    model,
+                    NOISY,
+                    String::new(),
+                    &m,
+                    None,
+                    load_start.elapsed().as_secs_f64(),
+                ));
+                if !quiet {
+                    eprintln!(
+                        "{model}: {} faces, noisy E_a {:.2} deg, E_v/l_e {:.4}",
+                        noisy.num_faces(),
+                        m.e_a_deg,
+                        m.e_v_over_le
+                    );
+                }
+                if args.render {
+                    let errors = per_face_angle_errors(&gt, &noisy).ok();
+                    panels.push(Panel {
+                        label: format!("{NOISY}\nE_a {:.2} deg", m.e_a_deg),
+                        mesh: noisy.clone(),
+                        errors,
+                    });
+                }
+            }
+            Err(e) => {
+                let e = anyhow::Error::from(e)
+                    .context(format!("{model}: Noisy.obj and Original.obj do not match"));
+                report
+                    .records
+                    .push(failed(model, NOISY, String::new(), &e, 0.0));
+            }
+        }
+        for method in &methods {
+            run_index += 1;
+            let run_start = Instant::now();
+            let bar = Bar::new(quiet);
+            let mut params = String::new();
+            let outcome = guarded(method, || {
+                let (result, denoise_s) = if method == NORMALNET {
+                    let (options, described) = settings.normalnet(model)?;
+                    params = described;
+                    let t = Instant::now();
+                    let r = denoise_normalnet::denoise(&noisy, &options, &bar)?;
+                    (r, t.elapsed().as_secs_f64())
+                } else {
+                    let (m, described) = settings.classical(model, method)?;
+                    params = described;
+                    let t = Instant::now();
+                    let r = m.denoise(&noisy, &bar)?;
+                    (r, t.elapsed().as_secs_f64())
+                };
+                let metrics = compare(&gt, &result).context("metrics of the result")?;
+                Ok((result, denoise_s, metrics))
+            });
+            use normalnet_mesh::Progress as _;
+            bar.finish();
+            match outcome {
+                Ok((result, denoise_s, metrics)) => {
+                    if !quiet {
+                        eprintln!(
+                            "[{run_index}/{total_runs}] {model} {method}: E_a {:.2} deg, E_v/l_e {:.4}, {denoise_s:.2} s",
+                            metrics.e_a_deg, metrics.e_v_over_le
+                        );
+                    }
+                    if args.save_meshes {
+                        let path = args.out.join(model).join(format!("{method}.obj"));
+                        std::fs::create_dir_all(args.out.join(model))?;
+                        normalnet_mesh::write_mesh(&path, &result)
+                            .with_context(|| format!("saving {}", path.display()))?;
+                    }
+                    if args.render {
+                        panels.push(Panel {
+                            label: format!("{method}\nE_a {:.2} deg", metrics.e_a_deg),
+                            errors: per_face_angle_errors(&gt, &result).ok(),
+                            mesh: result,
+                        });
+                    }
+                    report.records.push(record_from(
+                        model,
+                        method,
+                        params,
+                        &metrics,
+                        Some(denoise_s),
+                        run_start.elapsed().as_secs_f64(),
+                    ));
+                }
+                Err(e) => {
+                    if !quiet {
+                        eprintln!("[{run_index}/{total_runs}] {model} {method}: failed: {e:#}");
+                    }
+                    report.records.push(failed(
+                        model,
+                        method,
+                        params,
+                        &e,
+                        run_start.elapsed().as_secs_f64(),
+                    ));
+                }
+            }
+        }
+        if args.render {
+            panels.push(Panel {
+                label: "ground truth\n ".into(),
+                mesh: gt.clone(),
+                errors: None,
+            });
+            let view = settings.view(model).unwrap_or(args.view);
+            let file = format!("{model}.png");
+            match model_picture(model, &panels, &gt, &args, view)
+                .and_then(|img| img.write_png(args.out.join(&file)).map_err(Into::into))
+            {
+                Ok(()) => report.pictures.push((model.clone(), file)),
+                Err(e) => report.notes.push(format!("{model}: picture failed: {e:#}")),
+            }
+        }
+        // keep the files current so a long bench can be watched (and survives a stop)
+        write_report(&args.out, &report)
+            .with_context(|| format!("writing the report into {}", args.out.display()))?;
+    }
+    report.notes.push(format!(
+        "whole bench: {:.1} s",
+        started.elapsed().as_secs_f64()
+    ));
+    write_report(&args.out, &report)
+        .with_context(|| format!("writing the report into {}", args.out.display()))?;
+    if !quiet {
+        eprintln!(
+            "wrote {}/table.md, results.csv, results.json, index.html",
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtin_settings_parse_and_apply_table_2() {
+        let s = Settings::parse(BUILTIN_SETTINGS, "builtin").unwrap();
+        let (opts, desc) = s.normalnet("Fandisk0.3").unwrap();
+        assert_eq!(
+            (opts.iterations, opts.vertex_iterations, opts.mu_g),
+            (Some(10), Some(20), Some(0.25))
+        );
+        assert!(desc.contains("mu_g=0.25"), "{desc}");
+        let (opts, _) = s.normalnet("Bunny0.2").unwrap();
+        assert_eq!(
+            (opts.iterations, opts.vertex_iterations, opts.mu_g),
+            (Some(2), Some(5), Some(0.3))
+        );
+        let (opts, _) = s.normalnet("SharpSphere0.3").unwrap();
+        assert_eq!(
+            (opts.iterations, opts.vertex_iterations, opts.mu_g),
+            (Some(10), Some(20), Some(0.35))
+        );
+        let (_, desc) = s.classical("Twelve0.5Impulsive", "gnf").unwrap();
+        assert!(
+            desc.contains("normal_iterations=25") && desc.contains("mu_g=0.3"),
+            "{desc}"
+        );
+    }
+
+    #[test]
+    fn bad_settings_name_the_place() {
+        let e = Settings::parse("[defaults.nosuch]\nx = 1\n", "f.toml").unwrap_err();
+        assert!(
+            format!("{e:#}").contains("f.toml: [defaults.nosuch]"),
+            "{e:#}"
+        );
+        let s = Settings::parse("[models.\"M\".gnf]\nitersx = 3\n", "f.toml").unwrap();
+        let e = s.classical("M", "gnf").unwrap_err();
+        assert!(format!("{e:#}").contains("unknown key `itersx`"), "{e:#}");
+        let s = Settings::parse("[defaults.normalnet]\nmu_g = \"a\"\n", "f.toml").unwrap();
+        assert!(s.normalnet("M").is_err());
+        assert!(Settings::parse("[models.\"M\"]\nview = [0, 100]\n", "f.toml").is_err());
+    }
 }
