@@ -1,0 +1,487 @@
+//! Model bundles (SPEC §8): a folder with the six networks of one preset
+//! (`net1.bpk` … `net6.bpk`, burnpack files from `Module::save_file`) and a
+//! `manifest.toml` saying what they are and how they were trained. Loading
+//! needs only this module and [`crate::model`], not the training code.
+//!
+//! Network k serves the filtering iterations of [`INTERVALS`]`[k]`:
+//! [1], [2], [3], [4–5], [6–10], [11–N_f] (paper §4).
+
+use std::path::{Path, PathBuf};
+
+use burn::module::Module;
+use burn::tensor::Device;
+use normalnet_voxel::VoxelParams;
+use serde::{Deserialize, Serialize};
+
+use crate::NetError;
+use crate::model::{MU_GS, ModelConfig, NormalNet};
+
+/// First and last filtering iteration (1-based) of each network; `usize::MAX`
+/// stands for N_f (open end).
+pub const INTERVALS: [(usize, usize); 6] =
+    [(1, 1), (2, 2), (3, 3), (4, 5), (6, 10), (11, usize::MAX)];
+
+/// Index (0-based) of the network serving filtering iteration `k` (1-based).
+pub fn network_for_iteration(k: usize) -> usize {
+    INTERVALS
+        .iter()
+        .position(|&(a, b)| k >= a && k <= b)
+        .unwrap_or(0)
+}
+
+/// File name of network `i` (0-based) inside a bundle.
+pub fn network_file(i: usize) -> String {
+    format!("net{}.bpk", i + 1)
+}
+
+/// The manifest file name.
+pub const MANIFEST: &str = "manifest.toml";
+
+/// Version of the manifest layout written by this code.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// What a bundle is and how it was made (`manifest.toml`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// manifest layout version ([`FORMAT_VERSION`])
+    pub format: u32,
+    /// `paper`, `lite` or `tiny`
+    pub preset: String,
+    /// μ_g of the six outputs, in output order
+    pub mu_gs: Vec<f64>,
+    /// filtering iterations served by each network, `[first, last]`; last 0 = N_f
+    pub intervals: Vec<[usize; 2]>,
+    /// program version and git description at training time
+    pub code_version: String,
+    /// UTC time the bundle was written (seconds since the Unix epoch)
+    pub created_unix: u64,
+    /// network architecture
+    pub model: ModelConfig,
+    /// voxel grid the networks read
+    pub voxel: VoxelParams,
+    /// how the networks were trained
+    pub training: TrainingInfo,
+    /// one entry per network, in interval order
+    pub networks: Vec<NetworkInfo>,
+}
+
+/// Training data and settings shared by the six networks.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TrainingInfo {
+    /// clean training meshes (paths relative to the data folder, or `shape:NAME:SEED`)
+    pub sources: Vec<String>,
+    /// validation meshes (held-back training sources)
+    pub validation: Vec<String>,
+    /// noise settings of the noisy copies, in words
+    pub noise: String,
+    /// base seed of noise, sampling and initialisation
+    pub seed: u64,
+    /// batch size
+    pub batch: usize,
+    /// base learning rate and schedule, in words
+    pub learning_rate: String,
+    /// which meshes M_k were regenerated with the trained networks, in words
+    pub regeneration: String,
+    /// anything else a reader should know (deviations from the paper)
+    pub notes: String,
+}
+
+/// One trained network.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct NetworkInfo {
+    /// weight file inside the bundle
+    pub file: String,
+    /// `[first, last]` filtering iteration; last 0 = N_f
+    pub interval: [usize; 2],
+    /// optimisation steps taken
+    pub steps: usize,
+    /// training samples seen (steps × batch)
+    pub samples_seen: usize,
+    /// distinct faces in the sample pool
+    pub pool_faces: usize,
+    /// epochs over the pool (samples_seen / pool_faces)
+    pub epochs: f64,
+    /// wall-clock training time in seconds
+    pub train_seconds: f64,
+    /// mean training loss (MSE) over the last steps
+    pub train_loss: f64,
+    /// mean angular error (degrees) of the μ_g-0.35 output on the validation faces, kept checkpoint
+    pub validation_error_deg: f64,
+    /// the same error of the input (noisy) normal vs the μ_g-0.35 target, for scale
+    pub validation_baseline_deg: f64,
+}
+
+impl Manifest {
+    /// Interval list in manifest form (`usize::MAX` written as 0).
+    pub fn default_intervals() -> Vec<[usize; 2]> {
+        INTERVALS
+            .iter()
+            .map(|&(a, b)| [a, if b == usize::MAX { 0 } else { b }])
+            .collect()
+    }
+
+    /// Checks the manifest against what this code can run.
+    pub fn validate(&self, path: &Path) -> Result<(), NetError> {
+        let bad = |message: String| NetError::BadManifest {
+            path: path.to_path_buf(),
+            message,
+        };
+        if self.format != FORMAT_VERSION {
+            return Err(bad(format!(
+                "format {} (this program reads {FORMAT_VERSION})",
+                self.format
+            )));
+        }
+        let preset = ModelConfig::preset(&self.preset).map_err(|e| bad(e.to_string()))?;
+        if preset != self.model {
+            return Err(bad(format!(
+                "model {:?} is not the {} preset {:?}",
+                self.model, self.preset, preset
+            )));
+        }
+        self.model.validate().map_err(|e| bad(e.to_string()))?;
+        self.voxel.validate().map_err(|e| bad(e.to_string()))?;
+        if self.voxel.side() != self.model.grid {
+            return Err(bad(format!(
+                "voxel grid side {} does not match the network's {}",
+                self.voxel.side(),
+                self.model.grid
+            )));
+        }
+        if self.mu_gs.len() * 3 != self.model.outputs {
+            return Err(bad(format!(
+                "{} μ_g values for {} outputs",
+                self.mu_gs.len(),
+                self.model.outputs
+            )));
+        }
+        if self.mu_gs.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
+            return Err(bad("mu_gs must be positive".into()));
+        }
+        if self.intervals != Manifest::default_intervals() {
+            return Err(bad(format!(
+                "intervals {:?} (expected {:?})",
+                self.intervals,
+                Manifest::default_intervals()
+            )));
+        }
+        if self.networks.len() != INTERVALS.len() {
+            return Err(bad(format!(
+                "{} networks listed (expected {})",
+                self.networks.len(),
+                INTERVALS.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Reads and validates `manifest.toml`.
+    pub fn read(path: &Path) -> Result<Manifest, NetError> {
+        let text = std::fs::read_to_string(path).map_err(|e| NetError::io(path, e))?;
+        let manifest: Manifest = toml::from_str(&text).map_err(|e| NetError::BadManifest {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        manifest.validate(path)?;
+        Ok(manifest)
+    }
+
+    /// Writes `manifest.toml` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), NetError> {
+        let text = toml::to_string_pretty(self).map_err(|e| NetError::BadManifest {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        write_atomically(path, text.as_bytes())
+    }
+}
+
+/// Six loaded networks and their manifest, ready for inference.
+#[derive(Debug, Clone)]
+pub struct Bundle {
+    /// where it was loaded from
+    pub path: PathBuf,
+    /// what it is
+    pub manifest: Manifest,
+    /// the six networks, in interval order (inference mode)
+    pub networks: Vec<NormalNet>,
+    /// the device the networks live on
+    pub device: Device,
+}
+
+impl Bundle {
+    /// Loads the bundle in folder `path` onto `device` (use a plain, non-autodiff
+    /// device: batch norm then uses its running statistics).
+    ///
+    /// # Errors
+    /// [`NetError::MissingFile`] for a missing manifest or weight file,
+    /// [`NetError::BadManifest`] for an unreadable or inconsistent manifest,
+    /// [`NetError::WeightMismatch`] when a weight file does not fit the preset.
+    pub fn load(path: impl AsRef<Path>, device: &Device) -> Result<Bundle, NetError> {
+        let path = path.as_ref();
+        if !path.is_dir() {
+            return Err(NetError::MissingFile {
+                bundle: path.to_path_buf(),
+                file: "(the bundle folder itself)".into(),
+            });
+        }
+        let manifest_path = path.join(MANIFEST);
+        if !manifest_path.is_file() {
+            return Err(NetError::MissingFile {
+                bundle: path.to_path_buf(),
+                file: MANIFEST.into(),
+            });
+        }
+        let manifest = Manifest::read(&manifest_path)?;
+        let mut networks = Vec::with_capacity(INTERVALS.len());
+        for (i, info) in manifest.networks.iter().enumerate() {
+            if info.file.contains('/') || info.file.contains('\\') || info.file.is_empty() {
+                return Err(NetError::BadManifest {
+                    path: manifest_path.clone(),
+                    message: format!(
+                        "network {} file name {:?} is not a plain name",
+                        i + 1,
+                        info.file
+                    ),
+                });
+            }
+            let file = path.join(&info.file);
+            if !file.is_file() {
+                return Err(NetError::MissingFile {
+                    bundle: path.to_path_buf(),
+                    file: info.file.clone(),
+                });
+            }
+            networks.push(load_network(
+                &manifest.model,
+                &manifest.preset,
+                &file,
+                device,
+            )?);
+        }
+        Ok(Bundle {
+            path: path.to_path_buf(),
+            manifest,
+            networks,
+            device: device.clone(),
+        })
+    }
+
+    /// The voxel grid parameters the networks expect.
+    pub fn voxel_params(&self) -> VoxelParams {
+        self.manifest.voxel
+    }
+
+    /// Output slot (0..6) of the μ_g nearest to `mu_g`.
+    pub fn output_for_mu_g(&self, mu_g: f64) -> usize {
+        nearest_mu_g(&self.manifest.mu_gs, mu_g)
+    }
+}
+
+/// Index of the entry of `mu_gs` nearest to `mu_g` (first on ties).
+pub fn nearest_mu_g(mu_gs: &[f64], mu_g: f64) -> usize {
+    let mut best = 0;
+    for (i, m) in mu_gs.iter().enumerate() {
+        if (m - mu_g).abs() < (mu_gs[best] - mu_g).abs() - 1e-12 {
+            best = i;
+        }
+    }
+    best
+}
+
+/// Loads one network's weights from `file` into a fresh `config` network.
+pub fn load_network(
+    config: &ModelConfig,
+    preset: &str,
+    file: &Path,
+    device: &Device,
+) -> Result<NormalNet, NetError> {
+    config
+        .init(device, 0)
+        .try_load_file(file)
+        .map(|m| m.valid())
+        .map_err(|e| NetError::WeightMismatch {
+            path: file.to_path_buf(),
+            preset: preset.to_string(),
+            message: e.to_string(),
+        })
+}
+
+/// Saves one network to `file` (burnpack), atomically.
+pub fn save_network(model: &NormalNet, file: &Path) -> Result<(), NetError> {
+    let tmp = file.with_extension("bpk.tmp");
+    model
+        .clone()
+        .valid()
+        .save_file(&tmp)
+        .map_err(|e| NetError::Record {
+            path: tmp.clone(),
+            message: e.to_string(),
+        })?;
+    std::fs::rename(&tmp, file).map_err(|e| NetError::io(file, e))
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), NetError> {
+    let tmp = path.with_extension("tmp~");
+    std::fs::write(&tmp, bytes).map_err(|e| NetError::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| NetError::io(path, e))
+}
+
+/// Writes a whole bundle: the six networks and the manifest (written last,
+/// so a folder with a manifest is complete).
+pub fn save_bundle(
+    dir: &Path,
+    manifest: &Manifest,
+    networks: &[NormalNet],
+) -> Result<(), NetError> {
+    std::fs::create_dir_all(dir).map_err(|e| NetError::io(dir, e))?;
+    for (i, net) in networks.iter().enumerate() {
+        save_network(net, &dir.join(&manifest.networks[i].file))?;
+    }
+    manifest.write(&dir.join(MANIFEST))
+}
+
+/// A manifest for `preset` with default intervals and μ_g list and empty
+/// training information.
+pub fn new_manifest(preset: &str) -> Result<Manifest, NetError> {
+    let model = ModelConfig::preset(preset)?;
+    let voxel = match preset {
+        "paper" => VoxelParams::paper(),
+        "tiny" => VoxelParams::tiny(),
+        _ => VoxelParams::lite(),
+    };
+    Ok(Manifest {
+        format: FORMAT_VERSION,
+        preset: preset.to_string(),
+        mu_gs: MU_GS.to_vec(),
+        intervals: Manifest::default_intervals(),
+        code_version: code_version(),
+        created_unix: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs())
+            .unwrap_or(0),
+        model,
+        voxel,
+        training: TrainingInfo::default(),
+        networks: (0..INTERVALS.len())
+            .map(|i| NetworkInfo {
+                file: network_file(i),
+                interval: Manifest::default_intervals()[i],
+                ..NetworkInfo::default()
+            })
+            .collect(),
+    })
+}
+
+/// `normalnet-net <version>` plus `git describe` of the working tree when
+/// available.
+pub fn code_version() -> String {
+    let git = std::process::Command::new("git")
+        .args(["describe", "--always", "--dirty"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
+    match git {
+        Some(g) => format!("normalnet-net {} ({g})", env!("CARGO_PKG_VERSION")),
+        None => format!("normalnet-net {}", env!("CARGO_PKG_VERSION")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny_bundle(dir: &Path) -> Manifest {
+        let device = Device::flex();
+        let manifest = new_manifest("tiny").unwrap();
+        let nets: Vec<NormalNet> = (0..6)
+            .map(|i| ModelConfig::tiny().init(&device, i as u64))
+            .collect();
+        save_bundle(dir, &manifest, &nets).unwrap();
+        manifest
+    }
+
+    #[test]
+    fn intervals_cover_every_iteration() {
+        assert_eq!(network_for_iteration(1), 0);
+        assert_eq!(network_for_iteration(3), 2);
+        assert_eq!(network_for_iteration(5), 3);
+        assert_eq!(network_for_iteration(6), 4);
+        assert_eq!(network_for_iteration(10), 4);
+        assert_eq!(network_for_iteration(11), 5);
+        assert_eq!(network_for_iteration(40), 5);
+    }
+
+    #[test]
+    fn nearest_mu_g_picks_the_closest_output() {
+        assert_eq!(nearest_mu_g(&MU_GS, 0.35), 2);
+        assert_eq!(nearest_mu_g(&MU_GS, 0.0), 0);
+        assert_eq!(nearest_mu_g(&MU_GS, 0.9), 5);
+        assert_eq!(nearest_mu_g(&MU_GS, 0.31), 1);
+    }
+
+    #[test]
+    fn save_and_load_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = tiny_bundle(dir.path());
+        let bundle = Bundle::load(dir.path(), &Device::flex()).unwrap();
+        assert_eq!(bundle.manifest, manifest);
+        assert_eq!(bundle.networks.len(), 6);
+    }
+
+    #[test]
+    fn missing_files_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        tiny_bundle(dir.path());
+        std::fs::remove_file(dir.path().join("net4.bpk")).unwrap();
+        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        assert!(
+            matches!(err, NetError::MissingFile { ref file, .. } if file == "net4.bpk"),
+            "{err}"
+        );
+        let err = Bundle::load(dir.path().join("nope"), &Device::flex()).unwrap_err();
+        assert!(matches!(err, NetError::MissingFile { .. }), "{err}");
+        std::fs::remove_file(dir.path().join(MANIFEST)).unwrap();
+        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        assert!(err.to_string().contains("manifest.toml"), "{err}");
+    }
+
+    #[test]
+    fn wrong_preset_weights_are_rejected() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut manifest = tiny_bundle(dir.path());
+        // claim the weights are `lite`
+        manifest.preset = "lite".into();
+        manifest.model = ModelConfig::lite();
+        manifest.voxel = VoxelParams::lite();
+        manifest.write(&dir.path().join(MANIFEST)).unwrap();
+        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        assert!(matches!(err, NetError::WeightMismatch { .. }), "{err}");
+        assert!(err.to_string().contains("net1.bpk"), "{err}");
+    }
+
+    #[test]
+    fn bad_manifests_are_rejected() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = tiny_bundle(dir.path());
+        let path = dir.path().join(MANIFEST);
+        std::fs::write(&path, "preset = [").unwrap();
+        assert!(matches!(
+            Bundle::load(dir.path(), &Device::flex()),
+            Err(NetError::BadManifest { .. })
+        ));
+        let mut m = manifest.clone();
+        m.voxel = VoxelParams::lite();
+        m.write(&path).unwrap();
+        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        assert!(err.to_string().contains("grid side"), "{err}");
+        let mut m = manifest;
+        m.networks.pop();
+        m.write(&path).unwrap();
+        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        assert!(err.to_string().contains("5 networks"), "{err}");
+    }
+}
