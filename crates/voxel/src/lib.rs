@@ -8,6 +8,7 @@
 
 pub mod error;
 pub mod frame;
+pub mod inspect;
 pub mod loader;
 pub mod params;
 pub mod sampler;

@@ -90,6 +90,12 @@ impl BalancedSampler {
         out
     }
 
+    /// [`Self::draw_count`] with a ChaCha8 generator seeded by `seed`.
+    pub fn draw_count_seeded(&self, count: usize, seed: u64) -> Vec<SampleRef> {
+        use rand::SeedableRng;
+        self.draw_count(count, &mut rand_chacha::ChaCha8Rng::seed_from_u64(seed))
+    }
+
     /// `count` items split as evenly as possible over the non-empty
     /// categories (the remainder goes to randomly chosen categories),
     /// shuffled.
