@@ -1,10 +1,443 @@
-//! `normalnet denoise` (not built yet).
+//! `normalnet denoise IN OUT`: denoises a mesh with NormalNet (the default,
+//! SPEC §7) or a classical method of `normalnet_filters` (SPEC §4, §9), writes
+//! the result atomically with the input's vertex and face order, and prints
+//! timings (the denoising call alone and the whole command), the parameters
+//! and, with `--gt`, the error metrics (SPEC §3).
+//!
+//! Method parameters are optional flags; an absent flag keeps the default of
+//! the method's params struct (`GnfParams::default()`, ...), which is also
+//! what `--help` shows. A flag that does not apply to the chosen method is an
+//! error rather than silently ignored.
+
+use super::denoise_normalnet::{self, NormalnetOptions};
+use crate::progress::Bar;
+use anyhow::{Context, bail};
+use normalnet_filters::{
+    BnfParams, GnfParams, GtGuidedGnfParams, L0Params, Method, Sun07Params, gt_guided_gnf,
+};
+use normalnet_mesh::geometry::face_normals;
+use normalnet_mesh::metrics::compare;
+use normalnet_mesh::{Mesh, read_mesh, write_mesh};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The denoising methods of `--method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodName {
+    /// NormalNet (learned normal filtering, SPEC §7)
+    Normalnet,
+    /// guided mesh normal filtering (Zhang et al. 2015)
+    Gnf,
+    /// GNF guided by ground-truth normals (needs --gt; the oracle)
+    GtGnf,
+    /// bilateral normal filtering, local scheme (Zheng et al. 2011)
+    Bnf,
+    /// fast and effective feature-preserving denoising (Sun et al. 2007)
+    Sun07,
+    /// L0 minimisation (He & Schaefer 2013)
+    L0,
+}
+
+fn help_iterations() -> String {
+    format!(
+        "Normal-filtering iterations N_f [defaults: normalnet 10, gnf {}, gt-gnf {}, bnf {}, sun07 {}]",
+        GnfParams::default().normal_iterations,
+        GtGuidedGnfParams::default().iterations,
+        BnfParams::default().normal_iterations,
+        Sun07Params::default().normal_iterations
+    )
+}
+
+fn help_vertex_iterations() -> String {
+    format!(
+        "Vertex-update passes N_v (per iteration for normalnet/gnf/gt-gnf, after all normal passes for bnf/sun07) \
+         [defaults: normalnet 20, gnf {}, gt-gnf {}, bnf {}, sun07 {}]",
+        GnfParams::default().vertex_iterations,
+        GtGuidedGnfParams::default().vertex_iterations,
+        BnfParams::default().vertex_iterations,
+        Sun07Params::default().vertex_iterations
+    )
+}
+
+fn help_mu_g() -> String {
+    format!(
+        "μ_g (σ_r of GNF): width of the guidance range kernel [defaults: normalnet 0.35 (nearest trained output), \
+         gnf {}, gt-gnf {}]",
+        GnfParams::default().mu_g,
+        GtGuidedGnfParams::default().mu_g
+    )
+}
+
+fn help_sigma_s() -> String {
+    format!(
+        "Spatial kernel width σ_s in units of the mean centre distance d_s [defaults: gnf {}, gt-gnf {}, bnf {}]",
+        GnfParams::default().sigma_s_over_ds,
+        GtGuidedGnfParams::default().sigma_s_over_ds,
+        BnfParams::default().sigma_s_over_ds
+    )
+}
+
+fn help_radius() -> String {
+    format!(
+        "GNF neighbourhood radius in units of d_s [default: {}]",
+        GnfParams::default().radius_over_ds
+    )
+}
+
+fn help_sigma_r() -> String {
+    format!(
+        "BNF σ_r: range kernel width on normal differences [default: {}]",
+        BnfParams::default().sigma_r
+    )
+}
+
+fn help_threshold() -> String {
+    format!(
+        "Sun07 threshold T on n_i·n_j [default: {}]",
+        Sun07Params::default().threshold
+    )
+}
+
+fn help_lambda() -> String {
+    format!(
+        "L0 λ in units of l_e² (mean edge length squared) [default: {}]",
+        L0Params::default().lambda_over_le2
+    )
+}
+
+fn help_kappa() -> String {
+    format!(
+        "L0 κ: growth of β per iteration [default: {}]",
+        L0Params::default().kappa
+    )
+}
+
+fn help_beta0() -> String {
+    format!("L0 β_0: initial β [default: {}]", L0Params::default().beta0)
+}
+
+fn help_beta_max() -> String {
+    format!(
+        "L0 β_max: stop once β exceeds it [default: {}]",
+        L0Params::default().beta_max
+    )
+}
+
+fn help_alpha0() -> String {
+    format!(
+        "L0 α_0 in units of the mean dihedral angle γ̄ [default: {}]",
+        L0Params::default().alpha0_over_gamma
+    )
+}
+
+fn help_alpha_decay() -> String {
+    format!(
+        "L0 μ_α: decay of α per iteration [default: {}]",
+        L0Params::default().alpha_decay
+    )
+}
 
 /// Arguments of `normalnet denoise`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Noisy input mesh (.obj, .off, .ply, .stl).
+    pub input: PathBuf,
+    /// Output mesh (format from the extension; written atomically).
+    pub output: PathBuf,
+    /// Denoising method.
+    #[arg(long, short, value_enum, default_value_t = MethodName::Normalnet)]
+    pub method: MethodName,
+    /// N_f.
+    #[arg(long, help = help_iterations())]
+    pub iterations: Option<usize>,
+    /// N_v.
+    #[arg(long, help = help_vertex_iterations())]
+    pub vertex_iterations: Option<usize>,
+    /// μ_g.
+    #[arg(long, allow_negative_numbers = true, help = help_mu_g())]
+    pub mu_g: Option<f64>,
+    /// σ_s / d_s.
+    #[arg(long, allow_negative_numbers = true, help = help_sigma_s())]
+    pub sigma_s: Option<f64>,
+    /// GNF radius / d_s.
+    #[arg(long, allow_negative_numbers = true, help = help_radius())]
+    pub radius: Option<f64>,
+    /// BNF σ_r.
+    #[arg(long, allow_negative_numbers = true, help = help_sigma_r())]
+    pub sigma_r: Option<f64>,
+    /// Sun07 T.
+    #[arg(long, allow_negative_numbers = true, help = help_threshold())]
+    pub threshold: Option<f64>,
+    /// L0 λ / l_e².
+    #[arg(long, allow_negative_numbers = true, help = help_lambda())]
+    pub lambda: Option<f64>,
+    /// L0 κ.
+    #[arg(long, allow_negative_numbers = true, help = help_kappa())]
+    pub kappa: Option<f64>,
+    /// L0 β_0.
+    #[arg(long, allow_negative_numbers = true, help = help_beta0())]
+    pub beta0: Option<f64>,
+    /// L0 β_max.
+    #[arg(long, allow_negative_numbers = true, help = help_beta_max())]
+    pub beta_max: Option<f64>,
+    /// L0 α_0 / γ̄.
+    #[arg(long, allow_negative_numbers = true, help = help_alpha0())]
+    pub alpha0: Option<f64>,
+    /// L0 μ_α.
+    #[arg(long, allow_negative_numbers = true, help = help_alpha_decay())]
+    pub alpha_decay: Option<f64>,
+    /// NormalNet model bundle folder (default: the shipped bundle).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Ground-truth mesh: print error metrics of the result (required by gt-gnf).
+    #[arg(long)]
+    pub gt: Option<PathBuf>,
+    /// Print timings, parameters (and metrics) as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The classical parameters or NormalNet options chosen by the flags.
+enum Chosen {
+    Normalnet(NormalnetOptions),
+    Classical(Method),
+    GtGuided(GtGuidedGnfParams),
+}
+
+/// Rejects flags that the chosen method does not use.
+fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
+    let given: [(&str, bool); 14] = [
+        ("iterations", args.iterations.is_some()),
+        ("vertex-iterations", args.vertex_iterations.is_some()),
+        ("mu-g", args.mu_g.is_some()),
+        ("sigma-s", args.sigma_s.is_some()),
+        ("radius", args.radius.is_some()),
+        ("sigma-r", args.sigma_r.is_some()),
+        ("threshold", args.threshold.is_some()),
+        ("lambda", args.lambda.is_some()),
+        ("kappa", args.kappa.is_some()),
+        ("beta0", args.beta0.is_some()),
+        ("beta-max", args.beta_max.is_some()),
+        ("alpha0", args.alpha0.is_some()),
+        ("alpha-decay", args.alpha_decay.is_some()),
+        ("model", args.model.is_some()),
+    ];
+    for (flag, present) in given {
+        if present && !used.contains(&flag) {
+            bail!(
+                "--{flag} does not apply to --method {}",
+                method_label(args.method)
+            );
+        }
+    }
+    Ok(())
+}
+
+fn method_label(m: MethodName) -> &'static str {
+    match m {
+        MethodName::Normalnet => "normalnet",
+        MethodName::Gnf => "gnf",
+        MethodName::GtGnf => "gt-gnf",
+        MethodName::Bnf => "bnf",
+        MethodName::Sun07 => "sun07",
+        MethodName::L0 => "l0",
+    }
+}
+
+fn choose(args: &Args) -> anyhow::Result<Chosen> {
+    fn set<T: Copy>(field: &mut T, value: Option<T>) {
+        if let Some(v) = value {
+            *field = v;
+        }
+    }
+    let chosen = match args.method {
+        MethodName::Normalnet => {
+            reject_unused(args, &["iterations", "vertex-iterations", "mu-g", "model"])?;
+            Chosen::Normalnet(NormalnetOptions {
+                model: args.model.clone(),
+                iterations: args.iterations,
+                vertex_iterations: args.vertex_iterations,
+                mu_g: args.mu_g,
+            })
+        }
+        MethodName::Gnf => {
+            reject_unused(
+                args,
+                &[
+                    "iterations",
+                    "vertex-iterations",
+                    "mu-g",
+                    "sigma-s",
+                    "radius",
+                ],
+            )?;
+            let mut p = GnfParams::default();
+            set(&mut p.normal_iterations, args.iterations);
+            set(&mut p.vertex_iterations, args.vertex_iterations);
+            set(&mut p.mu_g, args.mu_g);
+            set(&mut p.sigma_s_over_ds, args.sigma_s);
+            set(&mut p.radius_over_ds, args.radius);
+            Chosen::Classical(Method::Gnf(p))
+        }
+        MethodName::GtGnf => {
+            reject_unused(
+                args,
+                &["iterations", "vertex-iterations", "mu-g", "sigma-s"],
+            )?;
+            if args.gt.is_none() {
+                bail!("--method gt-gnf needs the ground truth: pass --gt GT");
+            }
+            let mut p = GtGuidedGnfParams::default();
+            set(&mut p.iterations, args.iterations);
+            set(&mut p.vertex_iterations, args.vertex_iterations);
+            set(&mut p.mu_g, args.mu_g);
+            set(&mut p.sigma_s_over_ds, args.sigma_s);
+            p.validate()?;
+            Chosen::GtGuided(p)
+        }
+        MethodName::Bnf => {
+            reject_unused(
+                args,
+                &["iterations", "vertex-iterations", "sigma-s", "sigma-r"],
+            )?;
+            let mut p = BnfParams::default();
+            set(&mut p.normal_iterations, args.iterations);
+            set(&mut p.vertex_iterations, args.vertex_iterations);
+            set(&mut p.sigma_s_over_ds, args.sigma_s);
+            set(&mut p.sigma_r, args.sigma_r);
+            Chosen::Classical(Method::Bnf(p))
+        }
+        MethodName::Sun07 => {
+            reject_unused(args, &["iterations", "vertex-iterations", "threshold"])?;
+            let mut p = Sun07Params::default();
+            set(&mut p.normal_iterations, args.iterations);
+            set(&mut p.vertex_iterations, args.vertex_iterations);
+            set(&mut p.threshold, args.threshold);
+            Chosen::Classical(Method::Sun07(p))
+        }
+        MethodName::L0 => {
+            reject_unused(
+                args,
+                &[
+                    "lambda",
+                    "kappa",
+                    "beta0",
+                    "beta-max",
+                    "alpha0",
+                    "alpha-decay",
+                ],
+            )?;
+            let mut p = L0Params::default();
+            set(&mut p.lambda_over_le2, args.lambda);
+            set(&mut p.kappa, args.kappa);
+            set(&mut p.beta0, args.beta0);
+            set(&mut p.beta_max, args.beta_max);
+            set(&mut p.alpha0_over_gamma, args.alpha0);
+            set(&mut p.alpha_decay, args.alpha_decay);
+            Chosen::Classical(Method::L0(p))
+        }
+    };
+    if let Chosen::Classical(m) = &chosen {
+        m.validate()?;
+    }
+    Ok(chosen)
+}
 
 /// Runs `normalnet denoise`.
-pub fn run(_args: Args, _quiet: bool) -> anyhow::Result<()> {
-    anyhow::bail!("`normalnet denoise` is not implemented yet")
+pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
+    let t_total = Instant::now();
+    let chosen = choose(&args)?;
+    let mesh =
+        read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
+    let gt: Option<Mesh> = match &args.gt {
+        Some(path) => {
+            let gt = read_mesh(path)
+                .with_context(|| format!("reading ground truth {}", path.display()))?;
+            if gt.num_faces() != mesh.num_faces() {
+                bail!(
+                    "{}: {} faces, but {} has {}; metrics compare face by face",
+                    path.display(),
+                    gt.num_faces(),
+                    args.input.display(),
+                    mesh.num_faces()
+                );
+            }
+            Some(gt)
+        }
+        None => None,
+    };
+    let progress = Bar::new(quiet);
+    let t_denoise = Instant::now();
+    let (result, parameters) = match &chosen {
+        Chosen::Normalnet(options) => {
+            let out = denoise_normalnet::denoise(&mesh, options, &progress)?;
+            let parameters = json!({
+                "model": options.model,
+                "iterations": options.iterations,
+                "vertex_iterations": options.vertex_iterations,
+                "mu_g": options.mu_g,
+            });
+            (out, parameters)
+        }
+        Chosen::Classical(method) => {
+            let out = method.denoise(&mesh, &progress).with_context(|| {
+                format!("denoising {} with {}", args.input.display(), method.name())
+            })?;
+            // The params struct of the variant, without the enum tag.
+            let tagged = serde_json::to_value(method)?;
+            let parameters = tagged
+                .as_object()
+                .and_then(|o| o.values().next().cloned())
+                .unwrap_or(tagged);
+            (out, parameters)
+        }
+        Chosen::GtGuided(params) => {
+            let gt = gt.as_ref().context("--method gt-gnf needs --gt")?;
+            let out = gt_guided_gnf(&mesh, &face_normals(gt), params, &progress)
+                .with_context(|| format!("denoising {} with gt-gnf", args.input.display()))?;
+            (out, serde_json::to_value(params)?)
+        }
+    };
+    let denoise_seconds = t_denoise.elapsed().as_secs_f64();
+    write_mesh(&args.output, &result)
+        .with_context(|| format!("writing {}", args.output.display()))?;
+    let metrics = match &gt {
+        Some(gt) => Some(compare(gt, &result).context("computing metrics")?),
+        None => None,
+    };
+    let total_seconds = t_total.elapsed().as_secs_f64();
+    let method = method_label(args.method);
+    if args.json {
+        let v = json!({
+            "input": args.input,
+            "output": args.output,
+            "method": method,
+            "vertices": mesh.num_vertices(),
+            "faces": mesh.num_faces(),
+            "parameters": parameters,
+            "denoise_seconds": denoise_seconds,
+            "total_seconds": total_seconds,
+            "threads": rayon::current_num_threads(),
+            "gt": args.gt,
+            "metrics": metrics,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!(
+            "{} -> {}: {method}, {} vertices, {} faces, denoise {denoise_seconds:.3} s, total {total_seconds:.3} s",
+            args.input.display(),
+            args.output.display(),
+            mesh.num_vertices(),
+            mesh.num_faces()
+        );
+        println!("parameters: {parameters}");
+        if let Some(m) = metrics {
+            println!(
+                "E_a {:.3}°  E_v {:.6} (E_v/l_e {:.4})  Hausdorff {:.6}",
+                m.e_a_deg, m.e_v, m.e_v_over_le, m.hausdorff
+            );
+        }
+    }
+    Ok(())
 }
