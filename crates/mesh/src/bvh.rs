@@ -135,46 +135,66 @@ pub struct TriangleBvh {
 impl TriangleBvh {
     /// Builds the hierarchy over all faces of `mesh`.
     pub fn new(mesh: &Mesh) -> TriangleBvh {
+        /// One triangle while building: centroid, bounds, face index.
+        #[derive(Clone, Copy)]
+        struct Item {
+            c: Vec3,
+            lo: Vec3,
+            hi: Vec3,
+            id: u32,
+        }
         let n = mesh.num_faces();
-        let tris: Vec<[Vec3; 3]> = (0..n).map(|f| mesh.corners(f)).collect();
-        let cents: Vec<Vec3> = tris
-            .iter()
-            .map(|t| vec3::scale(vec3::add(vec3::add(t[0], t[1]), t[2]), 1.0 / 3.0))
-            .collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * n / LEAF_SIZE + 2);
-        nodes.push(Node {
-            lo: [0.0; 3],
-            hi: [0.0; 3],
-            start: 0,
-            count: 0,
-        });
-        // Explicit stack of (node, start, end) to build without recursion.
-        let mut stack = vec![(0usize, 0usize, n)];
-        while let Some((ni, s, e)) = stack.pop() {
-            let mut lo = [f64::INFINITY; 3];
-            let mut hi = [f64::NEG_INFINITY; 3];
-            let mut clo = [f64::INFINITY; 3];
-            let mut chi = [f64::NEG_INFINITY; 3];
-            for &f in &order[s..e] {
-                for p in &tris[f as usize] {
+        let mut items: Vec<Item> = (0..n)
+            .map(|f| {
+                let [a, b, c] = mesh.corners(f);
+                let mut lo = a;
+                let mut hi = a;
+                for p in [b, c] {
                     for k in 0..3 {
                         lo[k] = lo[k].min(p[k]);
                         hi[k] = hi[k].max(p[k]);
                     }
                 }
-                let c = cents[f as usize];
-                for k in 0..3 {
-                    clo[k] = clo[k].min(c[k]);
-                    chi[k] = chi[k].max(c[k]);
+                Item {
+                    c: vec3::scale(vec3::add(vec3::add(a, b), c), 1.0 / 3.0),
+                    lo,
+                    hi,
+                    id: f as u32,
                 }
-            }
-            nodes[ni].lo = lo;
-            nodes[ni].hi = hi;
+            })
+            .collect();
+        let empty = Node {
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+            start: 0,
+            count: 0,
+        };
+        let mut nodes = Vec::with_capacity(2 * n / LEAF_SIZE + 2);
+        nodes.push(empty);
+        // Top-down split with an explicit stack of (node, start, end); a child
+        // always has a larger index than its parent, so the inner bounds are
+        // filled bottom-up afterwards by one reverse sweep.
+        let mut stack = vec![(0usize, 0usize, n)];
+        while let Some((ni, s, e)) = stack.pop() {
             if e - s <= LEAF_SIZE {
-                nodes[ni].start = s as u32;
-                nodes[ni].count = (e - s) as u32;
+                let node = &mut nodes[ni];
+                node.start = s as u32;
+                node.count = (e - s) as u32;
+                for it in &items[s..e] {
+                    for k in 0..3 {
+                        node.lo[k] = node.lo[k].min(it.lo[k]);
+                        node.hi[k] = node.hi[k].max(it.hi[k]);
+                    }
+                }
                 continue;
+            }
+            let mut clo = [f64::INFINITY; 3];
+            let mut chi = [f64::NEG_INFINITY; 3];
+            for it in &items[s..e] {
+                for k in 0..3 {
+                    clo[k] = clo[k].min(it.c[k]);
+                    chi[k] = chi[k].max(it.c[k]);
+                }
             }
             let ext = vec3::sub(chi, clo);
             let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
@@ -185,27 +205,30 @@ impl TriangleBvh {
                 2
             };
             let mid = s + (e - s) / 2;
-            order[s..e].select_nth_unstable_by(mid - s, |&x, &y| {
-                cents[x as usize][axis].total_cmp(&cents[y as usize][axis])
-            });
+            items[s..e].select_nth_unstable_by(mid - s, |x, y| x.c[axis].total_cmp(&y.c[axis]));
             let left = nodes.len();
-            nodes.push(Node {
-                lo: [0.0; 3],
-                hi: [0.0; 3],
-                start: 0,
-                count: 0,
-            });
-            nodes.push(nodes[left]);
+            nodes.push(empty);
+            nodes.push(empty);
             nodes[ni].start = left as u32;
-            nodes[ni].count = 0;
             stack.push((left, s, mid));
             stack.push((left + 1, mid, e));
         }
-        let tris = order.iter().map(|&f| tris[f as usize]).collect();
+        for ni in (0..nodes.len()).rev() {
+            if nodes[ni].count == 0 {
+                let (l, r) = (nodes[ni].start as usize, nodes[ni].start as usize + 1);
+                for k in 0..3 {
+                    nodes[ni].lo[k] = nodes[l].lo[k].min(nodes[r].lo[k]);
+                    nodes[ni].hi[k] = nodes[l].hi[k].max(nodes[r].hi[k]);
+                }
+            }
+        }
         TriangleBvh {
             nodes,
-            tris,
-            ids: order,
+            tris: items
+                .iter()
+                .map(|it| mesh.corners(it.id as usize))
+                .collect(),
+            ids: items.iter().map(|it| it.id).collect(),
         }
     }
 

@@ -20,10 +20,9 @@
 
 use crate::bvh::{Closest, TriangleBvh, closest_point_on_triangle};
 use crate::error::MeshError;
-use crate::geometry::{face_areas, face_normals, mean_edge_length};
+use crate::geometry::{face_areas, face_normals};
 use crate::mesh::Mesh;
 use crate::progress::{NoProgress, Progress};
-use crate::topology::Topology;
 use crate::vec3::{self, Vec3};
 use rayon::prelude::*;
 
@@ -159,8 +158,7 @@ pub fn compare_with_progress(
     // GT -> result. Same face count: face `f` of the other mesh is a good
     // first guess for the vertices of face `f` (same answer, less search).
     let used_g = used_vertices(gt);
-    let bvh_g = TriangleBvh::new(gt);
-    let bvh_r = TriangleBvh::new(result);
+    let (bvh_g, bvh_r) = rayon::join(|| TriangleBvh::new(gt), || TriangleBvh::new(result));
     progress.advance(1);
     let d = hinted_distances(result, gt, &bvh_g);
     progress.advance(1);
@@ -191,7 +189,7 @@ pub fn compare_with_progress(
     };
     let max_r = d.iter().copied().fold(0.0, f64::max);
     let max_g = dg.iter().copied().fold(0.0, f64::max);
-    let le = mean_edge_length(gt, &Topology::new(gt.num_vertices(), &gt.faces));
+    let le = unique_edge_mean_length(gt);
     let diag = bbox_diag(gt, &used_g);
     if !(le > 0.0 && diag > 0.0) {
         return Err(MeshError::InvalidParameter {
@@ -260,6 +258,32 @@ fn hinted_distances(from: &Mesh, to: &Mesh, bvh: &TriangleBvh) -> Vec<f64> {
 /// Exact distances from `points` to the surface of `mesh`, in parallel.
 pub fn point_surface_distances(points: &[Vec3], mesh: &Mesh) -> Vec<f64> {
     TriangleBvh::new(mesh).distances(points)
+}
+
+/// `l_e` (mean length over unique edges) without building a [`crate::Topology`]:
+/// the same edges as `Topology::edges`, summed in the same sorted order.
+fn unique_edge_mean_length(m: &Mesh) -> f64 {
+    let mut keys: Vec<u64> = Vec::with_capacity(3 * m.num_faces());
+    for t in &m.faces {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let (a, b) = if a < b { (a, b) } else { (b, a) };
+            keys.push(((a as u64) << 32) | b as u64);
+        }
+    }
+    keys.par_sort_unstable();
+    keys.dedup();
+    let total: f64 = keys
+        .iter()
+        .map(|&k| {
+            vec3::dist2(
+                m.positions[(k >> 32) as usize],
+                m.positions[k as u32 as usize],
+            )
+            .sqrt()
+        })
+        .sum();
+    total / keys.len() as f64
 }
 
 /// Number of vertices of `m` used by no face.
@@ -387,6 +411,15 @@ mod tests {
         assert!(r.max_dist_gt_to_result > 0.0);
         let e = compare(&collapsed, &m).unwrap_err().to_string();
         assert!(e.contains("degenerate ground truth"), "{e}");
+    }
+
+    #[test]
+    fn edge_length_matches_topology() {
+        let m = tetra();
+        let t = crate::Topology::new(4, &m.faces);
+        let a = unique_edge_mean_length(&m);
+        let b = crate::geometry::mean_edge_length(&m, &t);
+        assert!((a - b).abs() <= 1e-15 * b, "{a} {b}");
     }
 
     #[test]
