@@ -1,10 +1,81 @@
-//! `normalnet info` (not built yet).
+//! `normalnet info`: counts, bounding box, `l_e`, `d_s` and defects of a mesh
+//! (SPEC §1; the validation policy of `normalnet_mesh::validate`).
+
+use anyhow::Context;
+use normalnet_mesh::io::{Format, read_mesh_as};
+use normalnet_mesh::validate::validate;
+use std::path::PathBuf;
+use std::time::Instant;
 
 /// Arguments of `normalnet info`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Mesh file (.obj, .off, .ply, .stl).
+    pub mesh: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Read as this format whatever the extension (obj, off, ply, stl).
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<Format>,
+}
+
+/// Parses a `--format` value.
+pub fn parse_format(s: &str) -> Result<Format, String> {
+    Format::from_name(s)
+        .ok_or_else(|| format!("unknown format {s:?} (expected obj, off, ply or stl)"))
+}
+
+/// The format to read `path` as: `--format`, else the extension.
+pub fn format_for(path: &std::path::Path, over: Option<Format>) -> anyhow::Result<Format> {
+    match over.or_else(|| Format::from_path(path)) {
+        Some(f) => Ok(f),
+        None => anyhow::bail!(
+            "{}: unknown mesh format (expected .obj, .off, .ply or .stl, or pass --format)",
+            path.display()
+        ),
+    }
+}
 
 /// Runs `normalnet info`.
-pub fn run(_args: Args, _quiet: bool) -> anyhow::Result<()> {
-    anyhow::bail!("`normalnet info` is not implemented yet")
+pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
+    let t = Instant::now();
+    let mesh = read_mesh_as(&args.mesh, format_for(&args.mesh, args.format)?)
+        .with_context(|| format!("reading {}", args.mesh.display()))?;
+    let load = t.elapsed().as_secs_f64();
+    let r = validate(&mesh);
+    if args.json {
+        let v = serde_json::json!({
+            "path": args.mesh,
+            "report": r,
+            "warnings": r.warnings(),
+            "load_seconds": load,
+            "seconds": t.elapsed().as_secs_f64(),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    let [x0, y0, z0] = r.bbox_min;
+    let [x1, y1, z1] = r.bbox_max;
+    println!("{}", args.mesh.display());
+    println!("  vertices               {}", r.vertices);
+    println!("  faces                  {}", r.faces);
+    println!("  edges                  {}", r.edges);
+    println!("  bounding box           [{x0}, {y0}, {z0}] .. [{x1}, {y1}, {z1}]");
+    println!("  bbox diagonal          {:.6}", r.bbox_diagonal);
+    println!("  mean edge length l_e   {:.6}", r.mean_edge_length);
+    println!("  mean centre dist d_s   {:.6}", r.mean_centre_distance);
+    println!("  surface area           {:.6}", r.area);
+    println!("  components             {}", r.components);
+    println!("  Euler characteristic   {}", r.euler_characteristic);
+    println!("  boundary edges         {}", r.boundary_edges);
+    println!("  non-manifold edges     {}", r.non_manifold_edges);
+    println!("  degenerate faces       {}", r.degenerate_faces);
+    println!("  duplicate faces        {}", r.duplicate_faces);
+    println!("  unreferenced vertices  {}", r.unreferenced_vertices);
+    println!("  read in                {:.3} s", load);
+    for w in r.warnings() {
+        println!("warning: {w}");
+    }
+    Ok(())
 }

@@ -1,10 +1,91 @@
-//! `normalnet noise` (not built yet).
+//! `normalnet noise`: adds the literature's synthetic noise to a clean mesh
+//! (SPEC §2, `normalnet_mesh::noise`): `σ = L·l_e`, Gaussian or impulsive,
+//! along the clean vertex normals or random directions, seeded.
+
+use super::info::{format_for, parse_format};
+use anyhow::Context;
+use normalnet_mesh::io::{Format, WriteOptions, read_mesh_as, write_mesh_as};
+use normalnet_mesh::noise::{NoiseDirection, NoiseParams, add_noise_with_info};
+use std::path::PathBuf;
 
 /// Arguments of `normalnet noise`.
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Clean input mesh.
+    pub input: PathBuf,
+    /// Noisy output mesh (format from the extension; written atomically).
+    pub output: PathBuf,
+    /// Noise level L: σ = L · mean edge length [default: 0.3].
+    #[arg(long)]
+    pub level: Option<f64>,
+    /// Impulsive noise: move only this fraction of the vertices (0..1).
+    #[arg(long, value_name = "FRACTION")]
+    pub impulsive: Option<f64>,
+    /// Displacement direction [default: normal].
+    #[arg(long, value_enum)]
+    pub direction: Option<Direction>,
+    /// Random seed (same seed, same output bytes).
+    #[arg(long)]
+    pub seed: u64,
+    /// Read the input as this format whatever its extension.
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<Format>,
+    /// Write PLY output as ASCII instead of binary.
+    #[arg(long)]
+    pub ply_ascii: bool,
+}
+
+/// `--direction` values.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Direction {
+    /// Along the clean vertex normal.
+    Normal,
+    /// Along a random unit vector per vertex.
+    Random,
+}
 
 /// Runs `normalnet noise`.
-pub fn run(_args: Args, _quiet: bool) -> anyhow::Result<()> {
-    anyhow::bail!("`normalnet noise` is not implemented yet")
+pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
+    let clean = read_mesh_as(&args.input, format_for(&args.input, args.format)?)
+        .with_context(|| format!("reading {}", args.input.display()))?;
+    let out_format = format_for(&args.output, None)?;
+    let defaults = NoiseParams::default();
+    let params = NoiseParams {
+        level: args.level.unwrap_or(defaults.level),
+        impulsive_fraction: args.impulsive,
+        direction: match args.direction {
+            None => defaults.direction,
+            Some(Direction::Normal) => NoiseDirection::Normal,
+            Some(Direction::Random) => NoiseDirection::Random,
+        },
+        seed: args.seed,
+    };
+    let (noisy, info) = add_noise_with_info(&clean, &params)?;
+    write_mesh_as(
+        &args.output,
+        &noisy,
+        out_format,
+        &WriteOptions {
+            ply_ascii: args.ply_ascii,
+        },
+    )
+    .with_context(|| format!("writing {}", args.output.display()))?;
+    eprintln!(
+        "{}: {} noise, level {} (sigma {:.6} = {} x l_e {:.6}), {} of {} vertices moved along {:?}, seed {}",
+        args.output.display(),
+        if params.impulsive_fraction.is_some() {
+            "impulsive"
+        } else {
+            "gaussian"
+        },
+        params.level,
+        info.sigma,
+        params.level,
+        info.mean_edge_length,
+        info.displaced,
+        noisy.num_vertices(),
+        params.direction,
+        params.seed
+    );
+    Ok(())
 }
