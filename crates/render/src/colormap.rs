@@ -72,6 +72,19 @@ pub fn nice_error_scale(per_face_deg: &[f64]) -> f64 {
         .unwrap_or(180.0)
 }
 
+/// A number of ticks (3–6) whose spacing is a whole number, else a multiple
+/// of 0.5, else 5: 15 → 4 (0, 5, 10, 15), 10 → 6, 20 → 5, 1 → 3.
+pub fn round_tick_count(max_value: f64) -> usize {
+    let fits = |n: usize, unit: f64| {
+        let step = max_value / (n - 1) as f64 / unit;
+        step > 0.0 && (step - step.round()).abs() < 1e-9
+    };
+    [1.0, 0.5]
+        .iter()
+        .find_map(|&unit| [5, 4, 6, 3].into_iter().find(|&n| fits(n, unit)))
+        .unwrap_or(5)
+}
+
 /// A vertical colour bar from 0 (bottom) to `max_value` (top) with evenly
 /// spaced tick labels on its right and a title above.
 #[derive(Clone, Debug)]
@@ -95,10 +108,10 @@ pub struct ColourBar {
 impl ColourBar {
     /// A bar sized for an image of height `image_height`.
     pub fn for_height(max_value: f64, image_height: u32, title: &str) -> ColourBar {
-        let text_scale = (image_height / 400).clamp(1, 4);
+        let text_scale = (image_height / 300).clamp(1, 4);
         ColourBar {
             max_value,
-            ticks: 5,
+            ticks: round_tick_count(max_value),
             title: title.to_string(),
             bar_width: 6 * text_scale + 8,
             bar_height: (image_height as f64 * 0.6) as u32,
@@ -220,8 +233,22 @@ mod tests {
     }
 
     #[test]
+    fn tick_counts_give_round_steps() {
+        let labels = |m: f64| ColourBar::for_height(m, 400, "").tick_labels();
+        assert_eq!(labels(15.0), vec!["0", "5", "10", "15"]);
+        assert_eq!(labels(30.0), vec!["0", "10", "20", "30"]);
+        assert_eq!(labels(10.0), vec!["0", "2", "4", "6", "8", "10"]);
+        assert_eq!(labels(20.0), vec!["0", "5", "10", "15", "20"]);
+        assert_eq!(labels(1.0), vec!["0.0", "0.5", "1.0"]);
+        assert_eq!(labels(90.0), vec!["0", "30", "60", "90"]);
+    }
+
+    #[test]
     fn tick_labels_are_even() {
-        let bar = ColourBar::for_height(30.0, 400, "deg");
+        let bar = ColourBar {
+            ticks: 5,
+            ..ColourBar::for_height(30.0, 400, "deg")
+        };
         assert_eq!(
             bar.tick_labels(),
             vec!["0.0", "7.5", "15.0", "22.5", "30.0"]

@@ -20,7 +20,7 @@ pub fn compose_grid(images: &[Image], cols: usize, labels: &[String]) -> Image {
     let rows = images.len().div_ceil(cols);
     let cell_w = images.iter().map(|i| i.width()).max().unwrap_or(1);
     let cell_h = images.iter().map(|i| i.height()).max().unwrap_or(1);
-    let scale = (cell_w / 250).clamp(1, 4);
+    let scale = (cell_w / 200).clamp(1, 4);
     let lines = labels.iter().map(|l| l.lines().count()).max().unwrap_or(0) as u32;
     let caption_h = if lines == 0 {
         0
