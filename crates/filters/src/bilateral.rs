@@ -15,13 +15,14 @@
 
 use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
-use normalnet_mesh::geometry::mean_centre_distance;
+use crate::stats::mean_centre_distance;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 use rayon::prelude::*;
 
 /// Parameters of BNF; `Default` is the reference defaults.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct BnfParams {
     /// σ_r: width of the range kernel W_r on normal differences; default 0.35.
     pub sigma_r: f64,

@@ -29,7 +29,8 @@
 
 use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
-use normalnet_mesh::geometry::{face_centres, mean_centre_distance};
+use crate::stats::mean_centre_distance;
+use normalnet_mesh::geometry::face_centres;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Csr, FaceGeometry, Mesh, NO_FACE, Progress, Topology};
 use rayon::prelude::*;
@@ -39,6 +40,7 @@ pub const CONSISTENCY_EPSILON: f64 = 1.0e-9;
 
 /// Parameters of GNF; `Default` is the reference code's defaults.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct GnfParams {
     /// μ_g (σ_r in the reference code): width of the guidance range kernel
     /// G_g on normal differences; default 0.35.

@@ -18,8 +18,8 @@
 
 use crate::error::{FilterError, check_range};
 use crate::gnf::radius_neighbourhood;
+use crate::stats::mean_centre_distance;
 use crate::vertex_update::{VertexUpdateBuffers, vertex_update_in_place};
-use normalnet_mesh::geometry::mean_centre_distance;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 use rayon::prelude::*;
@@ -167,6 +167,7 @@ fn gt_guided_pass(
 
 /// Parameters of the GT-guided denoiser (the oracle of MEASURED.md).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct GtGuidedGnfParams {
     /// μ_g: width of the range kernel on ground-truth normal differences;
     /// default 0.35 (NormalNet's default, SPEC §7).

@@ -31,11 +31,12 @@
 //! Boundary and non-manifold edges get no D/R term.
 
 use crate::error::{FilterError, check_range};
+use crate::stats::mean_edge_length;
 use faer::Mat;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use normalnet_mesh::geometry::{face_normals, mean_edge_length, triangle_area};
+use normalnet_mesh::geometry::{face_normals, triangle_area};
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Mesh, Progress, Topology};
 use rayon::prelude::*;
@@ -43,6 +44,7 @@ use rayon::prelude::*;
 /// Parameters of L0 denoising; `Default` is the paper's constants with
 /// `λ = 0.05·l_e²`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct L0Params {
     /// λ / l_e²: weight of the L0 term in units of the squared mean edge
     /// length; default 0.05.

@@ -17,6 +17,7 @@ pub mod error;
 pub mod gnf;
 pub mod gt_guided;
 pub mod l0;
+pub mod stats;
 pub mod sun07;
 pub mod vertex_update;
 

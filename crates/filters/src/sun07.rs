@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 /// Parameters of Sun07; `Default` is the reference defaults.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Sun07Params {
     /// T: threshold on `n_i · n_j` below which a neighbour gets no weight;
     /// default 0.5.
