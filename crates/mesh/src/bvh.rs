@@ -265,9 +265,14 @@ impl TriangleBvh {
             return None;
         }
         let mut best = start;
-        let mut stack: Vec<(f64, u32)> = Vec::with_capacity(64);
-        stack.push((box_dist2(p, self.nodes[0].lo, self.nodes[0].hi), 0));
-        while let Some((d, ni)) = stack.pop() {
+        // Median splits keep the depth <= 32 for u32 face counts; the stack
+        // holds at most depth + 1 entries, so a fixed array suffices.
+        let mut stack = [(0.0f64, 0u32); 64];
+        stack[0] = (box_dist2(p, self.nodes[0].lo, self.nodes[0].hi), 0);
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (d, ni) = stack[top];
             if d > best.dist2 {
                 continue;
             }
@@ -292,12 +297,18 @@ impl TriangleBvh {
                 let dl = box_dist2(p, self.nodes[l as usize].lo, self.nodes[l as usize].hi);
                 let dr = box_dist2(p, self.nodes[r as usize].lo, self.nodes[r as usize].hi);
                 // Push the farther child first so the nearer one is visited next.
-                if dl <= dr {
-                    stack.push((dr, r));
-                    stack.push((dl, l));
+                let (near, far) = if dl <= dr {
+                    ((dl, l), (dr, r))
                 } else {
-                    stack.push((dl, l));
-                    stack.push((dr, r));
+                    ((dr, r), (dl, l))
+                };
+                if far.0 <= best.dist2 {
+                    stack[top] = far;
+                    top += 1;
+                }
+                if near.0 <= best.dist2 {
+                    stack[top] = near;
+                    top += 1;
                 }
             }
         }

@@ -117,28 +117,44 @@ pub fn vertex_normals(mesh: &Mesh, face_normals: &[Vec3]) -> Vec<Vec3> {
     sum.into_iter().map(vec3::normalize_or_zero).collect()
 }
 
-/// `l_e`: mean length over unique edges.
+/// Chunk length of the deterministic parallel sums below.
+const SUM_CHUNK: usize = 4096;
+
+/// `l_e`: mean length over unique edges (deterministic: the same bits for
+/// any thread count).
 pub fn mean_edge_length(mesh: &Mesh, topology: &Topology) -> f64 {
     if topology.edges.is_empty() {
         return 0.0;
     }
-    let total: f64 = topology
+    // Fixed chunks summed in order: the same bits whatever the thread count
+    // (a rayon `sum` may associate differently from run to run).
+    let partial: Vec<f64> = topology
         .edges
-        .par_iter()
-        .map(|&[a, b]| vec3::dist2(mesh.positions[a as usize], mesh.positions[b as usize]).sqrt())
-        .sum();
-    total / topology.edges.len() as f64
+        .par_chunks(SUM_CHUNK)
+        .map(|c| {
+            c.iter()
+                .map(|&[a, b]| vec3::dist2(mesh.positions[a as usize], mesh.positions[b as usize]).sqrt())
+                .sum::<f64>()
+        })
+        .collect();
+    partial.iter().sum::<f64>() / topology.edges.len() as f64
 }
 
 /// `d_s`: mean distance between the centres of edge-adjacent faces (each
 /// interior manifold edge counted once); 0 when no face has an edge neighbour.
 pub fn mean_centre_distance(topology: &Topology, centres: &[Vec3]) -> f64 {
-    let (sum, count) = topology
+    let partial: Vec<(f64, usize)> = topology
         .edge_faces
-        .par_iter()
-        .filter(|[a, b]| *a != NO_FACE && *b != NO_FACE)
-        .map(|&[a, b]| (vec3::dist2(centres[a as usize], centres[b as usize]).sqrt(), 1usize))
-        .reduce(|| (0.0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
+        .par_chunks(SUM_CHUNK)
+        .map(|c| {
+            c.iter()
+                .filter(|[a, b]| *a != NO_FACE && *b != NO_FACE)
+                .fold((0.0, 0), |(s, n), &[a, b]| {
+                    (s + vec3::dist2(centres[a as usize], centres[b as usize]).sqrt(), n + 1)
+                })
+        })
+        .collect();
+    let (sum, count) = partial.iter().fold((0.0, 0usize), |x, y| (x.0 + y.0, x.1 + y.1));
     if count == 0 { 0.0 } else { sum / count as f64 }
 }
 
