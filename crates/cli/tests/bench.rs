@@ -118,14 +118,15 @@ fn bench_writes_table_results_and_pictures_and_survives_a_failing_method() {
     std::fs::write(
         &settings,
         "[defaults.gnf]\nnormal_iterations = 5\nvertex_iterations = 5\n\n\
-         [defaults.normalnet]\niterations = 1\nmodel = \"/nonexistent/normalnet-bundle\"\n",
+         [defaults.normalnet]\niterations = 1\nmodel = \"/nonexistent/normalnet-bundle\"\n\n\
+         [models.\"Cube0.3\"]\nskip = [\"sun07\"]\n",
     )
     .unwrap();
     let out = tmp.path().join("out");
     let status = normalnet()
         .args(["--quiet", "bench", "--data"])
         .arg(&data)
-        .args(["--methods", "gnf,normalnet", "--settings"])
+        .args(["--methods", "gnf,normalnet,sun07", "--settings"])
         .arg(&settings)
         .args(["--render", "--panel-size", "160x120", "--out"])
         .arg(&out)
@@ -135,7 +136,7 @@ fn bench_writes_table_results_and_pictures_and_survives_a_failing_method() {
 
     let table = std::fs::read_to_string(out.join("table.md")).unwrap();
     assert!(
-        table.contains("| model | noise | metric | noisy | gnf | normalnet |"),
+        table.contains("| model | noise | metric | noisy | gnf | normalnet | sun07 |"),
         "{table}"
     );
     assert!(table.contains("| Cube | 0.3 | E_a (deg) |"), "{table}");
@@ -144,6 +145,7 @@ fn bench_writes_table_results_and_pictures_and_survives_a_failing_method() {
         "normalnet with a missing bundle must fail: {table}"
     );
     assert!(table.contains("[Cube0.3](Cube0.3.png)"), "{table}");
+    assert!(table.contains("| failed | skipped |"), "{table}");
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
@@ -168,7 +170,7 @@ fn bench_writes_table_results_and_pictures_and_survives_a_failing_method() {
     assert!(get("normalnet")["e_a_deg"].is_null());
 
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 4, "{csv}");
+    assert_eq!(csv.lines().count(), 5, "{csv}");
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("<img src=\"Cube0.3.png\""));
 

@@ -42,6 +42,8 @@ pub struct RunRecord {
     pub total_seconds: Option<f64>,
     /// the error message when the run failed
     pub error: Option<String>,
+    /// why the run was skipped (by the settings), when it was
+    pub skipped: Option<String>,
 }
 
 /// Everything the report files show.
@@ -135,6 +137,7 @@ const METRIC_ROWS: [MetricRow; 3] = [
 enum Cell {
     Value(String, bool),
     Failed,
+    Skipped,
     Missing,
 }
 
@@ -173,6 +176,7 @@ impl BenchReport {
             .enumerate()
             .map(|(i, m)| match self.record(model, m) {
                 None => Cell::Missing,
+                Some(r) if r.skipped.is_some() => Cell::Skipped,
                 Some(r) if r.error.is_some() => Cell::Failed,
                 Some(r) => match (metric.get)(r) {
                     Some(v)
@@ -210,6 +214,13 @@ impl BenchReport {
 
     fn failures(&self) -> Vec<&RunRecord> {
         self.records.iter().filter(|r| r.error.is_some()).collect()
+    }
+
+    fn skips(&self) -> Vec<&RunRecord> {
+        self.records
+            .iter()
+            .filter(|r| r.skipped.is_some())
+            .collect()
     }
 }
 
@@ -253,6 +264,7 @@ pub fn table_markdown(report: &BenchReport) -> String {
                     Cell::Value(v, true) => format!("**{v}**"),
                     Cell::Value(v, false) => v,
                     Cell::Failed => "failed".to_string(),
+                    Cell::Skipped => "skipped".to_string(),
                     Cell::Missing => "–".to_string(),
                 })
                 .collect();
@@ -306,6 +318,20 @@ pub fn table_markdown(report: &BenchReport) -> String {
                 md_escape(&r.model),
                 md_escape(&r.method),
                 md_escape(r.error.as_deref().unwrap_or(""))
+            );
+        }
+        let _ = writeln!(s);
+    }
+    let skips = report.skips();
+    if !skips.is_empty() {
+        let _ = writeln!(s, "## Skipped runs\n");
+        for r in skips {
+            let _ = writeln!(
+                s,
+                "- {} / {}: {}",
+                md_escape(&r.model),
+                md_escape(&r.method),
+                md_escape(r.skipped.as_deref().unwrap_or(""))
             );
         }
         let _ = writeln!(s);
@@ -370,12 +396,12 @@ fn opt(v: Option<f64>) -> String {
 /// `results.csv`: one line per run, full precision, empty cells for missing values.
 pub fn results_csv(report: &BenchReport) -> String {
     let mut s = String::from(
-        "model,noise,method,params,e_a_deg,e_v,e_v_over_le,hausdorff,denoise_seconds,total_seconds,error\n",
+        "model,noise,method,params,e_a_deg,e_v,e_v_over_le,hausdorff,denoise_seconds,total_seconds,error,skipped\n",
     );
     for r in &report.records {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{}",
             csv_field(&r.model),
             csv_field(&r.noise),
             csv_field(&r.method),
@@ -387,6 +413,7 @@ pub fn results_csv(report: &BenchReport) -> String {
             opt(r.denoise_seconds),
             opt(r.total_seconds),
             csv_field(r.error.as_deref().unwrap_or("")),
+            csv_field(r.skipped.as_deref().unwrap_or("")),
         );
     }
     s
@@ -443,6 +470,7 @@ pub fn index_html(report: &BenchReport) -> String {
                     Cell::Value(v, true) => write!(s, "<td><b>{v}</b></td>"),
                     Cell::Value(v, false) => write!(s, "<td>{v}</td>"),
                     Cell::Failed => write!(s, "<td class=\"fail\">failed</td>"),
+                    Cell::Skipped => write!(s, "<td>skipped</td>"),
                     Cell::Missing => write!(s, "<td>–</td>"),
                 };
             }
@@ -460,6 +488,20 @@ pub fn index_html(report: &BenchReport) -> String {
                 html_escape(&r.model),
                 html_escape(&r.method),
                 html_escape(r.error.as_deref().unwrap_or(""))
+            );
+        }
+        let _ = writeln!(s, "</ul>");
+    }
+    let skips = report.skips();
+    if !skips.is_empty() {
+        let _ = writeln!(s, "<h2>Skipped runs</h2><ul>");
+        for r in skips {
+            let _ = writeln!(
+                s,
+                "<li>{} / {}: {}</li>",
+                html_escape(&r.model),
+                html_escape(&r.method),
+                html_escape(r.skipped.as_deref().unwrap_or(""))
             );
         }
         let _ = writeln!(s, "</ul>");
@@ -534,6 +576,7 @@ mod tests {
             denoise_seconds: Some(1.0),
             total_seconds: Some(2.0),
             error: None,
+            skipped: None,
         }
     }
 
@@ -629,12 +672,31 @@ mod tests {
     }
 
     #[test]
+    fn skipped_runs_are_marked_not_failed() {
+        let mut r = report();
+        r.records.push(RunRecord {
+            model: "Fandisk0.3".into(),
+            method: "sun07".into(),
+            skipped: Some("too slow here".into()),
+            ..Default::default()
+        });
+        r.methods.push("sun07".into());
+        let md = table_markdown(&r);
+        assert!(md.contains("| **2.50** | skipped |"), "{md}");
+        assert!(
+            md.contains("## Skipped runs\n\n- Fandisk0.3 / sun07: too slow here"),
+            "{md}"
+        );
+        assert!(!md.contains("Fandisk0.3 / sun07: too slow here\n\n## Failed"));
+    }
+
+    #[test]
     fn csv_and_json_hold_every_record() {
         let r = report();
         let csv = results_csv(&r);
         assert_eq!(csv.lines().count(), 1 + r.records.len());
         assert!(
-            csv.contains("Fandisk0.3,0.3,gnf,x=1,2.93,0.0065,0.065,0.5,1,2,\n"),
+            csv.contains("Fandisk0.3,0.3,gnf,x=1,2.93,0.0065,0.065,0.5,1,2,,\n"),
             "{csv}"
         );
         let json: serde_json::Value = serde_json::from_str(&results_json(&r).unwrap()).unwrap();

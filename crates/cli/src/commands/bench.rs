@@ -10,7 +10,8 @@
 //! own defaults key by key; keys are the fields of the method's params struct
 //! (`normalnet_filters::GnfParams`, ...) or, for `normalnet`, `iterations`,
 //! `vertex_iterations`, `mu_g` and `model`. `[models."MODEL"] view = [az, el]`
-//! sets the camera of that model's picture. A failing method is reported as a
+//! sets the camera of that model's picture and `skip = ["METHOD", ...]`
+//! leaves methods out on that model (shown as `skipped`). A failing method is reported as a
 //! failed cell and the bench goes on.
 
 use crate::commands::denoise_normalnet::{self, NormalnetOptions};
@@ -114,6 +115,16 @@ impl Settings {
                 if key == "view" {
                     view_from_toml(v)
                         .with_context(|| format!("{source}: [models.\"{model}\"] view"))?;
+                } else if key == "skip" {
+                    let names = v
+                        .as_array()
+                        .map(|a| a.iter().map(|x| x.as_str()).collect::<Option<Vec<_>>>());
+                    let Some(Some(names)) = names else {
+                        bail!("{source}: [models.\"{model}\"] skip must be a list of method names");
+                    };
+                    if let Some(bad) = names.iter().find(|m| !known(m)) {
+                        bail!("{source}: [models.\"{model}\"] skip: unknown method `{bad}`");
+                    }
                 } else if !known(key) {
                     bail!("{source}: [models.\"{model}\"]: unknown method `{key}`");
                 } else if !v.is_table() {
@@ -166,6 +177,15 @@ impl Settings {
             ));
         }
         out
+    }
+
+    /// Whether the settings skip `method` on `model` (`[models."MODEL"] skip = [...]`).
+    fn skips(&self, model: &str, method: &str) -> bool {
+        self.models
+            .get(model)
+            .and_then(|m| m.get("skip"))
+            .and_then(|v| v.as_array())
+            .is_some_and(|a| a.iter().any(|x| x.as_str() == Some(method)))
     }
 
     /// The picture camera of `model`, if the settings give one.
@@ -330,6 +350,7 @@ fn record_from(
         denoise_seconds: denoise_s,
         total_seconds: Some(total_s),
         error: None,
+        skipped: None,
     }
 }
 
@@ -415,7 +436,7 @@ fn model_picture(
     let grid = compose_grid(&images, cols, &labels);
     let bar = ColourBar::for_height(max, grid.height().min(2 * args.panel_size.1), "error (deg)");
     let body = append_colour_bar(&grid, &bar);
-    let scale = (body.width() / 800).clamp(1, 3);
+    let scale = (body.width() / 600).clamp(1, 3);
     let title_h = 8 * scale + 16;
     let mut out = Image::new(body.width(), body.height() + title_h, [255, 255, 255]);
     draw_lines(
@@ -551,6 +572,21 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         for method in &methods {
             run_index += 1;
+            if settings.skips(model, method) {
+                if !quiet {
+                    eprintln!(
+                        "[{run_index}/{total_runs}] {model} {method}: skipped by the settings"
+                    );
+                }
+                report.records.push(RunRecord {
+                    model: model.clone(),
+                    noise: split_model_name(model).1,
+                    method: method.clone(),
+                    skipped: Some(format!("{}: [models.\"{model}\"] skip", settings.source)),
+                    ..Default::default()
+                });
+                continue;
+            }
             let run_start = Instant::now();
             let bar = Bar::new(quiet);
             let mut params = String::new();
@@ -694,5 +730,8 @@ mod tests {
         let s = Settings::parse("[defaults.normalnet]\nmu_g = \"a\"\n", "f.toml").unwrap();
         assert!(s.normalnet("M").is_err());
         assert!(Settings::parse("[models.\"M\"]\nview = [0, 100]\n", "f.toml").is_err());
+        assert!(Settings::parse("[models.\"M\"]\nskip = [\"nosuch\"]\n", "f.toml").is_err());
+        let s = Settings::parse("[models.\"M\"]\nskip = [\"normalnet\"]\n", "f.toml").unwrap();
+        assert!(s.skips("M", "normalnet") && !s.skips("M", "gnf") && !s.skips("N", "normalnet"));
     }
 }
