@@ -1,5 +1,5 @@
 //! `normalnet bench`: runs methods over noisy/clean pairs (`MODEL/Noisy.obj`
-//! + `MODEL/Original.obj`) and writes the comparison in the layout of the
+//! and `MODEL/Original.obj`) and writes the comparison in the layout of the
 //! paper's Table 3 (`table.md`), plus `results.csv`, `results.json`,
 //! `index.html` and, with `--render`, one picture per model with the noisy
 //! input, every method and the ground truth side by side, coloured by angular
