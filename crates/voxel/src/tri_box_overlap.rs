@@ -136,13 +136,14 @@ impl CubeTester {
     /// to `0..side` on each axis: `[(first, last); 3]` inclusive, or `None`
     /// when the bounding box misses the grid.
     #[inline]
+    #[allow(clippy::needless_range_loop)]
     pub fn cube_range(&self, side: usize) -> Option<[(usize, usize); 3]> {
         let mut r = [(0usize, 0usize); 3];
         for a in 0..3 {
             // Cube i touches [lo, hi] iff i ≤ hi and i + 1 ≥ lo.
             let first = (self.lo[a].ceil() - 1.0).max(0.0);
             let last = self.hi[a].floor().min(side as f64 - 1.0);
-            if !(first <= last) {
+            if first.is_nan() || last.is_nan() || first > last {
                 return None;
             }
             r[a] = (first as usize, last as usize);

@@ -268,6 +268,7 @@ impl EditMesh {
     /// Moves vertices whose faces are all coplanar within their plane by up
     /// to `amount` × their shortest edge, keeping orientation and angles of
     /// at least `min_angle` degrees.
+    #[allow(clippy::needless_range_loop)]
     pub fn jitter_planar<R: Rng>(&mut self, amount: f64, min_angle: f64, rng: &mut R) {
         let nv = self.positions.len();
         let mut vf: Vec<Vec<u32>> = vec![Vec::new(); nv];
