@@ -242,3 +242,30 @@ fn cubes_of_face(vox: &Voxelizer, mesh: &Mesh, f: usize) -> usize {
     }
     count
 }
+
+#[test]
+fn batch_equals_single_faces_and_ignores_thread_count() {
+    let mesh = bumpy(16, 4);
+    let params = VoxelParams::tiny();
+    let topo = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let vox = Voxelizer::new(&mesh, &topo, params).unwrap();
+    let faces: Vec<u32> = (0..mesh.num_faces() as u32).rev().step_by(5).collect();
+    let mut batch = vec![1.0f32; faces.len() * params.grid_len()];
+    let frames = vox.voxelize_batch(&faces, &mut batch);
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut batch1 = vec![0.0f32; batch.len()];
+    one_thread.install(|| vox.voxelize_batch(&faces, &mut batch1));
+    assert_eq!(batch, batch1);
+    let mut grid = vec![7.0f32; params.grid_len()];
+    for (i, &f) in faces.iter().enumerate() {
+        let frame = vox.voxelize_face(f as usize, &mut grid);
+        assert_eq!(frame, frames[i]);
+        assert_eq!(
+            &batch[i * params.grid_len()..(i + 1) * params.grid_len()],
+            &grid[..]
+        );
+    }
+}
