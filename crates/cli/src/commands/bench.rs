@@ -11,7 +11,10 @@
 //! (`normalnet_filters::GnfParams`, ...) or, for `normalnet`, `iterations`,
 //! `vertex_iterations`, `mu_g` and `model`. `[models."MODEL"] view = [az, el]`
 //! sets the camera of that model's picture and `skip = ["METHOD", ...]`
-//! leaves methods out on that model (shown as `skipped`). A failing method is reported as a
+//! leaves methods out on that model (shown as `skipped`). A column may be a
+//! variant `METHOD-NAME` (e.g. `gnf-ref`, `l0-lambda0.1`): it runs METHOD
+//! with the settings under its own name, so one method can appear with
+//! several settings side by side. A failing method is reported as a
 //! failed cell and the bench goes on.
 
 use crate::commands::denoise_normalnet::{self, NormalnetOptions};
@@ -98,7 +101,7 @@ impl Settings {
                 "{source}: unknown top-level key `{key}` (expected [defaults.METHOD] or [models.\"MODEL\".METHOD])"
             );
         }
-        let known = |m: &str| m == NORMALNET || Method::from_name(m).is_ok();
+        let known = |m: &str| base_method(m).is_some();
         for (method, v) in &defaults {
             if !known(method) {
                 bail!("{source}: [defaults.{method}]: unknown method `{method}`");
@@ -198,8 +201,11 @@ impl Settings {
 
     /// The classical `method` for `model` with its settings applied, and a
     /// one-line description of its parameters.
+    /// `name` may be a variant (`gnf-ref`): the base method with the
+    /// variant's own settings.
     pub fn classical(&self, model: &str, name: &str) -> anyhow::Result<(Method, String)> {
-        let method = Method::from_name(name)?;
+        let base = base_method(name).with_context(|| format!("unknown method `{name}`"))?;
+        let method = Method::from_name(&base)?;
         let mut value = serde_json::to_value(&method)?;
         // externally tagged: {"Gnf": {field: value, ...}}
         let params = value
@@ -225,10 +231,11 @@ impl Settings {
         Ok((method, described))
     }
 
-    /// NormalNet options for `model` and their description.
-    pub fn normalnet(&self, model: &str) -> anyhow::Result<(NormalnetOptions, String)> {
+    /// NormalNet options for `model` and their description; `name` is
+    /// `normalnet` or a variant of it (`normalnet-fast`).
+    pub fn normalnet(&self, model: &str, name: &str) -> anyhow::Result<(NormalnetOptions, String)> {
         let mut options = NormalnetOptions::default();
-        for (source, table) in self.overrides(model, NORMALNET) {
+        for (source, table) in self.overrides(model, name) {
             for (key, v) in table {
                 let bad = || format!("{source}: `{key}` has the wrong type ({v})");
                 match key.as_str() {
@@ -277,6 +284,18 @@ impl Settings {
         }
         Ok((options, parts.join(" ")))
     }
+}
+
+/// The method a column name runs: the name itself when it is `normalnet` or
+/// a classical method, else the part before the first `-` when that is one
+/// (a variant such as `gnf-ref` or `l0-lambda0.1`, with its own settings).
+pub fn base_method(name: &str) -> Option<String> {
+    let known = |m: &str| m == NORMALNET || Method::from_name(m).is_ok();
+    if known(name) {
+        return Some(name.to_string());
+    }
+    let (prefix, _) = name.split_once('-')?;
+    known(prefix).then(|| prefix.to_ascii_lowercase())
 }
 
 fn view_from_toml(v: &toml::Value) -> anyhow::Result<(f64, f64)> {
@@ -467,9 +486,9 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             .collect()
     };
     for m in &methods {
-        if m != NORMALNET && Method::from_name(m).is_err() {
+        if base_method(m).is_none() {
             bail!(
-                "unknown method `{m}` (known: {NORMALNET}, {})",
+                "unknown method `{m}` (known: {NORMALNET}, {}, or a variant METHOD-NAME with its own settings)",
                 Method::NAMES.join(", ")
             );
         }
@@ -591,8 +610,8 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             let bar = Bar::new(quiet);
             let mut params = String::new();
             let outcome = guarded(method, || {
-                let (result, denoise_s) = if method == NORMALNET {
-                    let (options, described) = settings.normalnet(model)?;
+                let (result, denoise_s) = if base_method(method).as_deref() == Some(NORMALNET) {
+                    let (options, described) = settings.normalnet(model, method)?;
                     params = described;
                     let t = Instant::now();
                     let r = denoise_normalnet::denoise(&noisy, &options, &bar)?;
@@ -694,18 +713,18 @@ mod tests {
     #[test]
     fn builtin_settings_parse_and_apply_table_2() {
         let s = Settings::parse(BUILTIN_SETTINGS, "builtin").unwrap();
-        let (opts, desc) = s.normalnet("Fandisk0.3").unwrap();
+        let (opts, desc) = s.normalnet("Fandisk0.3", NORMALNET).unwrap();
         assert_eq!(
             (opts.iterations, opts.vertex_iterations, opts.mu_g),
             (Some(10), Some(20), Some(0.25))
         );
         assert!(desc.contains("mu_g=0.25"), "{desc}");
-        let (opts, _) = s.normalnet("Bunny0.2").unwrap();
+        let (opts, _) = s.normalnet("Bunny0.2", NORMALNET).unwrap();
         assert_eq!(
             (opts.iterations, opts.vertex_iterations, opts.mu_g),
             (Some(2), Some(5), Some(0.3))
         );
-        let (opts, _) = s.normalnet("SharpSphere0.3").unwrap();
+        let (opts, _) = s.normalnet("SharpSphere0.3", NORMALNET).unwrap();
         assert_eq!(
             (opts.iterations, opts.vertex_iterations, opts.mu_g),
             (Some(10), Some(20), Some(0.35))
@@ -714,6 +733,30 @@ mod tests {
         assert!(
             desc.contains("normal_iterations=25") && desc.contains("mu_g=0.3"),
             "{desc}"
+        );
+    }
+
+    #[test]
+    fn variants_run_their_base_method_with_their_own_settings() {
+        assert_eq!(base_method("gnf").as_deref(), Some("gnf"));
+        assert_eq!(base_method("gnf-ref").as_deref(), Some("gnf"));
+        assert_eq!(base_method("normalnet-fast").as_deref(), Some(NORMALNET));
+        assert_eq!(base_method("nosuch-x"), None);
+        assert_eq!(base_method("gnfx"), None);
+        let s = Settings::parse(
+            "[defaults.gnf]\nmu_g = 0.25\n[defaults.\"gnf-ref\"]\nnormal_iterations = 3\n",
+            "f.toml",
+        )
+        .unwrap();
+        let (_, plain) = s.classical("M", "gnf").unwrap();
+        let (_, variant) = s.classical("M", "gnf-ref").unwrap();
+        assert!(
+            plain.contains("mu_g=0.25") && plain.contains("normal_iterations=20"),
+            "{plain}"
+        );
+        assert!(
+            variant.contains("mu_g=0.35") && variant.contains("normal_iterations=3"),
+            "{variant}"
         );
     }
 
@@ -728,7 +771,7 @@ mod tests {
         let e = s.classical("M", "gnf").unwrap_err();
         assert!(format!("{e:#}").contains("unknown key `itersx`"), "{e:#}");
         let s = Settings::parse("[defaults.normalnet]\nmu_g = \"a\"\n", "f.toml").unwrap();
-        assert!(s.normalnet("M").is_err());
+        assert!(s.normalnet("M", NORMALNET).is_err());
         assert!(Settings::parse("[models.\"M\"]\nview = [0, 100]\n", "f.toml").is_err());
         assert!(Settings::parse("[models.\"M\"]\nskip = [\"nosuch\"]\n", "f.toml").is_err());
         let s = Settings::parse("[models.\"M\"]\nskip = [\"normalnet\"]\n", "f.toml").unwrap();
