@@ -68,6 +68,7 @@ pub struct Scratch {
     touched: Vec<u32>,
     occupied: usize,
     candidates: usize,
+    visited: usize,
 }
 
 impl Scratch {
@@ -85,6 +86,11 @@ impl Scratch {
     /// grid) for the last face.
     pub fn last_candidates(&self) -> usize {
         self.candidates
+    }
+
+    /// Number of faces visited (tested against the grid) for the last face.
+    pub fn last_visited(&self) -> usize {
+        self.visited
     }
 
     fn prepare(&mut self, num_faces: usize, num_cells: usize) {
@@ -314,6 +320,7 @@ impl Voxelizer {
         }
         scratch.occupied = scratch.touched.len();
         scratch.candidates = candidates;
+        scratch.visited = scratch.queue.len();
         frame
     }
 

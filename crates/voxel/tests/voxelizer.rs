@@ -185,11 +185,12 @@ fn fandisk_occupancy_per_face() {
         let vox = Voxelizer::new(&mesh, &topo, params).unwrap();
         let mut grid = vec![0.0f32; params.grid_len()];
         let mut scratch = Scratch::new();
-        let (mut occupied, mut candidates, mut n) = (0usize, 0usize, 0usize);
+        let (mut occupied, mut candidates, mut n, mut visited) = (0usize, 0usize, 0usize, 0usize);
         for f in (0..mesh.num_faces()).step_by(97) {
             vox.voxelize_face_with(&mut scratch, f, 0.0, &mut grid);
             occupied += scratch.last_occupied();
             candidates += scratch.last_candidates();
+            visited += scratch.last_visited();
             n += 1;
         }
         // Cubes met by the central face f itself (the paper's "each face is
@@ -209,12 +210,13 @@ fn fandisk_occupancy_per_face() {
         let own_mean = own as f64 / n as f64;
         assert!(own_mean > 5.0, "{own_mean}");
         println!(
-            "{:?}: {} faces sampled, cubes met by the central face {:.1}, occupied cubes per grid {:.1}, faces voxelized per grid {:.1}, cubes per voxelized face {:.1}",
+            "{:?}: {} faces sampled, cubes met by the central face {:.1}, occupied cubes per grid {:.1}, faces voxelized per grid {:.1} (visited {:.1}), cubes per voxelized face {:.1}",
             params,
             n,
             own_mean,
             occupied as f64 / n as f64,
             candidates as f64 / n as f64,
+            visited as f64 / n as f64,
             occupied as f64 / candidates as f64
         );
     }
