@@ -61,6 +61,7 @@ fn cube_along_its_diagonal_covers_a_hexagon() {
         let expected = 3f64.sqrt() * scale * scale;
         let got = covered(&img, bg) as f64;
         let rel = (got - expected).abs() / expected;
+        println!("{shading:?}: covered {got} px, analytic {expected:.1} px ({:.3} %)", 100.0 * rel);
         assert!(
             rel < 0.01,
             "{shading:?}: covered {got} px, expected {expected:.0} ({rel:.4})"
@@ -145,4 +146,41 @@ fn real_scan_renders_when_data_present() {
     .unwrap();
     let c = covered(&img, bg);
     assert!(c > 320 * 240 / 10, "only {c} pixels covered");
+}
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Any triangle in the plane z = 0, seen head-on with the camera fitted
+        /// to the unit square (so 1 unit = 100 px), covers its area in pixels
+        /// up to the pixels its edges cut.
+        #[test]
+        fn triangle_covers_its_area(
+            pts in proptest::collection::vec((0.0f64..1.0, 0.0f64..1.0), 3),
+        ) {
+            let p: Vec<[f64; 3]> = pts.iter().map(|&(x, y)| [x, y, 0.0]).collect();
+            let mesh = Mesh::new(p.clone(), vec![[0, 1, 2]]).unwrap();
+            let bg = [0, 0, 0];
+            let opts = RenderOptions {
+                width: 100,
+                height: 100,
+                azimuth_deg: 0.0,
+                elevation_deg: 0.0,
+                margin: 0.0,
+                background: bg,
+                bounds: Some(([0.0, 0.0, 0.0], [1.0, 1.0, 0.0])),
+                ..Default::default()
+            };
+            let img = render(&mesh, &opts).unwrap();
+            let area = 0.5 * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0])).abs() * 1e4;
+            let d = |a: [f64; 3], b: [f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt() * 100.0;
+            let perimeter = d(p[0], p[1]) + d(p[1], p[2]) + d(p[2], p[0]);
+            let got = covered(&img, bg) as f64;
+            prop_assert!((got - area).abs() <= perimeter + 4.0, "covered {got}, area {area:.1}, perimeter {perimeter:.1}");
+        }
+    }
 }
