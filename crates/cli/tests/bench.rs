@@ -126,7 +126,7 @@ fn bench_writes_table_results_and_pictures_and_survives_a_failing_method() {
     let status = normalnet()
         .args(["--quiet", "bench", "--data"])
         .arg(&data)
-        .args(["--methods", "gnf,normalnet,sun07", "--settings"])
+        .args(["--methods", "gnf,normalnet,sun07,oracle", "--settings"])
         .arg(&settings)
         .args(["--render", "--panel-size", "160x120", "--out"])
         .arg(&out)
@@ -136,7 +136,7 @@ fn bench_writes_table_results_and_pictures_and_survives_a_failing_method() {
 
     let table = std::fs::read_to_string(out.join("table.md")).unwrap();
     assert!(
-        table.contains("| model | noise | metric | noisy | gnf | normalnet | sun07 |"),
+        table.contains("| model | noise | metric | noisy | gnf | normalnet | sun07 | oracle |"),
         "{table}"
     );
     assert!(table.contains("| Cube | 0.3 | E_a (deg) |"), "{table}");
@@ -170,7 +170,25 @@ fn bench_writes_table_results_and_pictures_and_survives_a_failing_method() {
     assert!(get("normalnet")["e_a_deg"].is_null());
 
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 5, "{csv}");
+    assert_eq!(csv.lines().count(), 6, "{csv}");
+    // the oracle (GT-guided GNF) runs and is never bold
+    let oracle_ea = get("oracle")["e_a_deg"].as_f64().unwrap();
+    assert!(
+        oracle_ea < noisy_ea / 2.0,
+        "oracle {oracle_ea} vs noisy {noisy_ea}"
+    );
+    let row = table
+        .lines()
+        .find(|l| l.starts_with("| Cube | 0.3 | E_a"))
+        .unwrap();
+    assert!(
+        !row.trim_end_matches(" |")
+            .rsplit(" | ")
+            .next()
+            .unwrap()
+            .contains("**"),
+        "{row}"
+    );
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("<img src=\"Cube0.3.png\""));
 

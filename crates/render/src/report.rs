@@ -61,6 +61,9 @@ pub struct BenchReport {
     pub pictures: Vec<(String, String)>,
     /// free-form lines shown under the table (machine, command, caveats)
     pub notes: Vec<String>,
+    /// method columns shown for reference but never ranked (bold), e.g. an
+    /// oracle that uses the ground truth; `noisy` is always unranked
+    pub unranked: Vec<String>,
 }
 
 /// Splits a data-set folder name into model and noise level:
@@ -148,6 +151,11 @@ impl BenchReport {
             .find(|r| r.model == model && r.method == method)
     }
 
+    /// Whether column `m` takes part in the bolding.
+    fn ranked(&self, m: &str) -> bool {
+        m != NOISY && !self.unranked.iter().any(|u| u == m)
+    }
+
     /// Column names: `noisy` then the methods.
     fn columns(&self) -> Vec<String> {
         let mut cols = vec![NOISY.to_string()];
@@ -162,7 +170,7 @@ impl BenchReport {
         let values: Vec<Option<f64>> = cols
             .iter()
             .map(|m| {
-                if m == NOISY {
+                if !self.ranked(m) {
                     None
                 } else {
                     self.record(model, m)
@@ -243,9 +251,14 @@ pub fn table_markdown(report: &BenchReport) -> String {
     let _ = writeln!(s, "# {}\n", report.title);
     let _ = writeln!(
         s,
-        "Best method per row in **bold** (the noisy input is shown for reference and not ranked). \
+        "Best method per row in **bold** ({} shown for reference and not ranked). \
          E_a: mean face-normal angle error in degrees; E_v / l_e: area-weighted RMS vertex distance \
-         to the ground-truth surface over its mean edge length; time: the denoising call alone.\n"
+         to the ground-truth surface over its mean edge length; time: the denoising call alone.\n",
+        if report.unranked.is_empty() {
+            "the noisy input is".to_string()
+        } else {
+            format!("the noisy input and {} are", report.unranked.join(", "))
+        }
     );
     let _ = writeln!(s, "| model | noise | metric | {} |", cols.join(" | "));
     let _ = writeln!(s, "|---|---|---|{}", "---:|".repeat(cols.len()));
@@ -284,7 +297,7 @@ pub fn table_markdown(report: &BenchReport) -> String {
             let ranked: Vec<Option<f64>> = cols
                 .iter()
                 .zip(&means)
-                .map(|(c, v)| if c == NOISY { None } else { *v })
+                .map(|(c, v)| if report.ranked(c) { *v } else { None })
                 .collect();
             let best = best_cells(&ranked, metric.decimals);
             let cells: Vec<String> = means
@@ -599,6 +612,7 @@ mod tests {
             ],
             pictures: vec![("Fandisk0.3".into(), "Fandisk0.3.png".into())],
             notes: vec!["a note".into()],
+            unranked: vec![],
         }
     }
 
@@ -688,6 +702,21 @@ mod tests {
             "{md}"
         );
         assert!(!md.contains("Fandisk0.3 / sun07: too slow here\n\n## Failed"));
+    }
+
+    #[test]
+    fn unranked_columns_are_never_bold() {
+        let mut r = report();
+        r.unranked = vec!["normalnet".into()];
+        let md = table_markdown(&r);
+        assert!(
+            md.contains("| Fandisk | 0.3 | E_a (deg) | 28.00 | **2.93** | 3.49 | 2.50 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("(the noisy input and normalnet are shown"),
+            "{md}"
+        );
     }
 
     #[test]

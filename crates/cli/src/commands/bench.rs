@@ -14,14 +14,17 @@
 //! leaves methods out on that model (shown as `skipped`). A column may be a
 //! variant `METHOD-NAME` (e.g. `gnf-ref`, `l0-lambda0.1`): it runs METHOD
 //! with the settings under its own name, so one method can appear with
-//! several settings side by side. A failing method is reported as a
+//! several settings side by side. `oracle` runs GT-guided GNF (it reads the
+//! ground truth: the ceiling of a perfect NormalNet, shown but never ranked)
+//! with the model's NormalNet N_f / N_v / μ_g unless `[..oracle]` says otherwise. A failing method is reported as a
 //! failed cell and the bench goes on.
 
 use crate::commands::denoise_normalnet::{self, NormalnetOptions};
 use crate::commands::render::{parse_size, parse_view};
 use crate::progress::Bar;
 use anyhow::{Context, bail};
-use normalnet_filters::Method;
+use normalnet_filters::{GtGuidedGnfParams, Method, gt_guided_gnf};
+use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::metrics::{Metrics, compare, per_face_angle_errors};
 use normalnet_mesh::{Mesh, read_mesh};
 use normalnet_render::report::{BenchReport, NOISY, RunRecord, split_model_name, write_report};
@@ -39,6 +42,12 @@ const BUILTIN_SETTINGS: &str = include_str!("../../../../configs/bench.toml");
 
 /// The NormalNet method's name in `--methods`.
 const NORMALNET: &str = "normalnet";
+
+/// The oracle's name in `--methods`: GT-guided GNF (guidance = the ground
+/// truth's normals), NormalNet's training target run as a denoiser, i.e. the
+/// ceiling a perfect CNN would reach (MEASURED.md). It reads the ground
+/// truth, so it is shown for reference and never ranked.
+const ORACLE: &str = "oracle";
 
 /// Arguments of `normalnet bench`.
 #[derive(clap::Args)]
@@ -231,6 +240,39 @@ impl Settings {
         Ok((method, described))
     }
 
+    /// The oracle's parameters for `model` and their description: N_f, N_v
+    /// and μ_g of the model's NormalNet settings (the oracle is a perfect
+    /// NormalNet), then the oracle's own settings (any field of
+    /// `GtGuidedGnfParams`) under `name`.
+    pub fn oracle(&self, model: &str, name: &str) -> anyhow::Result<(GtGuidedGnfParams, String)> {
+        let mut value = serde_json::to_value(GtGuidedGnfParams::default())?;
+        let params = value
+            .as_object_mut()
+            .context("oracle parameters are not a struct")?;
+        for (_, table) in self.overrides(model, NORMALNET) {
+            for (key, v) in table {
+                if ["iterations", "vertex_iterations", "mu_g"].contains(&key.as_str()) {
+                    params.insert(key, serde_json::to_value(v)?);
+                }
+            }
+        }
+        for (source, table) in self.overrides(model, name) {
+            for (key, v) in table {
+                if !params.contains_key(&key) {
+                    let known: Vec<&String> = params.keys().collect();
+                    bail!("{source}: unknown key `{key}` for {name} (known: {known:?})");
+                }
+                params.insert(key, serde_json::to_value(v)?);
+            }
+        }
+        let described = describe(params);
+        let p: GtGuidedGnfParams = serde_json::from_value(value)
+            .with_context(|| format!("settings for {name} on {model}"))?;
+        p.validate()
+            .with_context(|| format!("settings for {name} on {model}"))?;
+        Ok((p, described))
+    }
+
     /// NormalNet options for `model` and their description; `name` is
     /// `normalnet` or a variant of it (`normalnet-fast`).
     pub fn normalnet(&self, model: &str, name: &str) -> anyhow::Result<(NormalnetOptions, String)> {
@@ -290,7 +332,7 @@ impl Settings {
 /// a classical method, else the part before the first `-` when that is one
 /// (a variant such as `gnf-ref` or `l0-lambda0.1`, with its own settings).
 pub fn base_method(name: &str) -> Option<String> {
-    let known = |m: &str| m == NORMALNET || Method::from_name(m).is_ok();
+    let known = |m: &str| m == NORMALNET || m == ORACLE || Method::from_name(m).is_ok();
     if known(name) {
         return Some(name.to_string());
     }
@@ -488,7 +530,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     for m in &methods {
         if base_method(m).is_none() {
             bail!(
-                "unknown method `{m}` (known: {NORMALNET}, {}, or a variant METHOD-NAME with its own settings)",
+                "unknown method `{m}` (known: {NORMALNET}, {ORACLE}, {}, or a variant METHOD-NAME with its own settings)",
                 Method::NAMES.join(", ")
             );
         }
@@ -519,8 +561,20 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         title: "normalnet bench: E_a and E_v on noisy/clean pairs".into(),
         models: models.clone(),
         methods: methods.clone(),
+        unranked: methods
+            .iter()
+            .filter(|m| base_method(m).as_deref() == Some(ORACLE))
+            .cloned()
+            .collect(),
         ..Default::default()
     };
+    if !report.unranked.is_empty() {
+        report.notes.push(format!(
+            "{}: GT-guided GNF (guidance = ground-truth normals, sigma_s = 2 d_s), NormalNet's training target \
+             used as a denoiser; it reads the ground truth, so it is the ceiling a perfect CNN would reach, not a method",
+            report.unranked.join(", ")
+        ));
+    }
     report.notes.push(format!("data: {}", args.data.display()));
     report.notes.push(format!("settings: {}", settings.source));
     report
@@ -610,7 +664,15 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             let bar = Bar::new(quiet);
             let mut params = String::new();
             let outcome = guarded(method, || {
-                let (result, denoise_s) = if base_method(method).as_deref() == Some(NORMALNET) {
+                let base = base_method(method);
+                let (result, denoise_s) = if base.as_deref() == Some(ORACLE) {
+                    let (p, described) = settings.oracle(model, method)?;
+                    params = described;
+                    let gt_normals = face_normals(&gt);
+                    let t = Instant::now();
+                    let r = gt_guided_gnf(&noisy, &gt_normals, &p, &bar)?;
+                    (r, t.elapsed().as_secs_f64())
+                } else if base.as_deref() == Some(NORMALNET) {
                     let (options, described) = settings.normalnet(model, method)?;
                     params = described;
                     let t = Instant::now();
@@ -758,6 +820,23 @@ mod tests {
             variant.contains("mu_g=0.35") && variant.contains("normal_iterations=3"),
             "{variant}"
         );
+    }
+
+    #[test]
+    fn oracle_follows_the_normalnet_settings_then_its_own() {
+        let s = Settings::parse(BUILTIN_SETTINGS, "builtin").unwrap();
+        let (p, desc) = s.oracle("Block0.4", ORACLE).unwrap();
+        assert_eq!((p.iterations, p.vertex_iterations, p.mu_g), (20, 30, 0.3));
+        assert!(desc.contains("sigma_s_over_ds=2.0"), "{desc}");
+        let s = Settings::parse(
+            "[defaults.normalnet]\niterations = 4\nmodel = \"x\"\n[defaults.oracle]\nmu_g = 0.5\n",
+            "f.toml",
+        )
+        .unwrap();
+        let (p, _) = s.oracle("M", ORACLE).unwrap();
+        assert_eq!((p.iterations, p.mu_g), (4, 0.5));
+        let s = Settings::parse("[defaults.oracle]\nbogus = 1\n", "f.toml").unwrap();
+        assert!(s.oracle("M", ORACLE).is_err());
     }
 
     #[test]
