@@ -188,7 +188,7 @@ impl Manifest {
 
     /// Writes `manifest.toml` atomically.
     pub fn write(&self, path: &Path) -> Result<(), NetError> {
-        let text = toml::to_string_pretty(self).map_err(|e| NetError::BadManifest {
+        let text = toml::to_string(self).map_err(|e| NetError::BadManifest {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;

@@ -7,9 +7,21 @@
 pub mod bundle;
 pub mod data;
 pub mod error;
+pub mod inference;
 pub mod model;
+pub mod plot;
 pub mod step;
+pub mod training;
 
 pub use bundle::{Bundle, Manifest};
 pub use error::NetError;
+pub use inference::{DenoiseParams, StageTimes, denoise};
 pub use model::{MU_GS, ModelConfig, NormalNet};
+
+/// burn's device handle, re-exported so callers need no direct burn dependency.
+pub use burn::tensor::Device;
+
+/// The CPU device (burn's Flex backend), for inference.
+pub fn cpu_device() -> Device {
+    Device::flex()
+}

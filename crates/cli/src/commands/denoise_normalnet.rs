@@ -1,8 +1,18 @@
 //! The NormalNet method of `normalnet denoise` (SPEC §7): loads a model
 //! bundle (the shipped one by default) and runs the iterative pipeline.
 
+use anyhow::Context;
 use normalnet_mesh::{Mesh, Progress};
+use normalnet_net::inference::StageTimes;
+use normalnet_net::{Bundle, DenoiseParams};
 use std::path::PathBuf;
+
+/// The bundle shipped in the repository (`models/lite`), used when neither
+/// `--model` nor `NORMALNET_MODEL` names one.
+pub const DEFAULT_MODEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/lite");
+
+/// Environment variable naming a bundle folder (overridden by `--model`).
+pub const MODEL_ENV: &str = "NORMALNET_MODEL";
 
 /// User choices for a NormalNet run; `None` means the SPEC §7 default
 /// (N_f 10, N_v 20, μ_g 0.35, the shipped bundle).
@@ -18,11 +28,54 @@ pub struct NormalnetOptions {
     pub mu_g: Option<f64>,
 }
 
+/// The bundle folder to use: `--model`, else `$NORMALNET_MODEL`, else
+/// [`DEFAULT_MODEL`].
+pub fn model_path(options: &NormalnetOptions) -> PathBuf {
+    if let Some(p) = &options.model {
+        return p.clone();
+    }
+    match std::env::var_os(MODEL_ENV) {
+        Some(p) if !p.is_empty() => PathBuf::from(p),
+        _ => PathBuf::from(DEFAULT_MODEL),
+    }
+}
+
+/// The pipeline parameters: the options over the SPEC §7 defaults.
+pub fn params(options: &NormalnetOptions) -> DenoiseParams {
+    let d = DenoiseParams::default();
+    DenoiseParams {
+        iterations: options.iterations.unwrap_or(d.iterations),
+        vertex_iterations: options.vertex_iterations.unwrap_or(d.vertex_iterations),
+        mu_g: options.mu_g.unwrap_or(d.mu_g),
+        batch: d.batch,
+    }
+}
+
+/// Loads the bundle chosen by `options` on the CPU (burn Flex).
+pub fn load_bundle(options: &NormalnetOptions) -> anyhow::Result<Bundle> {
+    let path = model_path(options);
+    Bundle::load(&path, &normalnet_net::cpu_device())
+        .with_context(|| format!("loading the NormalNet model bundle {}", path.display()))
+}
+
 /// Denoises `mesh` with NormalNet.
 pub fn denoise(
-    _mesh: &Mesh,
-    _options: &NormalnetOptions,
-    _progress: &dyn Progress,
+    mesh: &Mesh,
+    options: &NormalnetOptions,
+    progress: &dyn Progress,
 ) -> anyhow::Result<Mesh> {
-    anyhow::bail!("the NormalNet method is not implemented yet")
+    denoise_with_stages(mesh, options, progress).map(|(m, _)| m)
+}
+
+/// [`denoise`] that also returns the seconds spent per stage (voxelize /
+/// CNN / vertex update), for `--json` reports.
+pub fn denoise_with_stages(
+    mesh: &Mesh,
+    options: &NormalnetOptions,
+    progress: &dyn Progress,
+) -> anyhow::Result<(Mesh, StageTimes)> {
+    let bundle = load_bundle(options)?;
+    let params = params(options);
+    normalnet_net::denoise(mesh, &bundle, &params, progress)
+        .with_context(|| format!("NormalNet with bundle {}", bundle.path.display()))
 }

@@ -1,0 +1,798 @@
+//! Iterative training of the six networks (paper §4, SPEC §8).
+//!
+//! `M_1` = noisy copies of the clean training sources. Network k (interval
+//! `[a_k, b_k]` of [`INTERVALS`]) is trained on samples of the meshes
+//! `M_{a_k}`: (voxel grid of face f with random yaw, the six GT-guided GNF
+//! targets of f in the same frame), balanced over the four `A_p` categories
+//! and built on the fly by loader threads (`normalnet_voxel::Loader`). Loss
+//! MSE, Adam (0.9, 0.999, 1e-8), lr `base · 0.96^(step / 5000)`, batch 80.
+//! After network k is trained, `M_{a_{k+1}}` is made by running network k
+//! (μ_g 0.4, N_v 20) `a_{k+1} − a_k` times on `M_{a_k}` — network k is the one
+//! inference uses for those iterations.
+//!
+//! Deviations for a CPU budget (all recorded in the bundle manifest):
+//! - meshes marked `regen` in the config (small ones) are regenerated with
+//!   the CNN; the others (large meshes, validation meshes) with the *oracle*
+//!   the CNN is trained to imitate: one GT-guided GNF pass at μ_g 0.4
+//!   (σ_s = 2·d_s) + N_v 20 vertex updates per iteration;
+//! - network k > 1 starts from network k−1's weights (warm start);
+//! - step counts and wall-clock limits per network come from the config.
+//!
+//! The run is resumable: every few minutes the current weights, Adam state
+//! and step are written to `OUT/checkpoint/`; the best weights (lowest
+//! validation error) to `OUT/netK.bpk`; the mesh states `M_k` to
+//! `OUT/states/`. `--resume` continues where it stopped.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use burn::module::Module;
+use burn::optim::ModuleOptimizer;
+use burn::tensor::Device;
+use normalnet_filters::{GtGuidedGnfParams, gt_guided_gnf};
+use normalnet_mesh::geometry::face_normals;
+use normalnet_mesh::vec3::{self, Vec3};
+use normalnet_mesh::{Mesh, NoProgress, NoiseParams, Progress, Topology, add_noise};
+use normalnet_voxel::{BalancedSampler, Loader, LoaderConfig, SampleSource, VoxelParams};
+use serde::{Deserialize, Serialize};
+
+use crate::NetError;
+use crate::bundle::{
+    INTERVALS, MANIFEST, Manifest, NetworkInfo, load_network, new_manifest, save_network,
+    write_atomically,
+};
+use crate::data::{SampleBatch, grids_tensor, tensor_to_vec};
+use crate::inference::filtered_normals;
+use crate::model::{MU_GS, ModelConfig, NUM_OUTPUTS, NormalNet};
+use crate::step::{adam, train_step};
+
+/// Output slot of μ_g 0.35, the one validated (SPEC §8).
+const VALIDATION_SLOT: usize = 2;
+/// μ_g used to regenerate the meshes M_k (SPEC §8).
+const REGEN_MU_G: f64 = 0.4;
+/// Vertex updates per regeneration iteration (SPEC §8).
+const REGEN_VERTEX_ITERATIONS: usize = 20;
+
+/// One clean training mesh: a file under the data folder or a procedural
+/// shape.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SourceSpec {
+    /// path relative to `data_dir`, or `shape:SEED` for a procedural shape
+    pub mesh: String,
+    /// noisy copies: Gaussian levels L (σ = L·l_e)
+    #[serde(default)]
+    pub gaussian: Vec<f64>,
+    /// noisy copies: impulsive, `[L, fraction]`
+    #[serde(default)]
+    pub impulsive: Vec<[f64; 2]>,
+    /// regenerate M_k of this mesh with the CNN (else with the oracle)
+    #[serde(default)]
+    pub regen: bool,
+}
+
+/// Everything `normalnet train` needs; `Default` is a small CPU run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrainConfig {
+    /// `paper`, `lite` or `tiny`
+    pub preset: String,
+    /// base seed (noise, sampling, yaw, initialisation)
+    pub seed: u64,
+    /// samples per step (SPEC: 80)
+    pub batch: usize,
+    /// base learning rate (SPEC: 1e-4)
+    pub lr: f64,
+    /// lr multiplier per `lr_decay_steps` steps (SPEC: 0.96 per 5000)
+    pub lr_decay: f64,
+    /// steps per lr decay
+    pub lr_decay_steps: usize,
+    /// optimisation steps per network (six values)
+    pub steps: [usize; 6],
+    /// wall-clock limit per network in seconds (six values; 0 = none)
+    pub max_seconds: [f64; 6],
+    /// validate every this many steps
+    pub validate_every: usize,
+    /// faces in the validation set
+    pub validation_faces: usize,
+    /// write a resumable checkpoint every this many seconds
+    pub checkpoint_seconds: f64,
+    /// start network k from network k−1's weights
+    pub warm_start: bool,
+    /// loader threads
+    pub workers: usize,
+    /// folder of the training data (`data/` with `gd/`, `c3d/`); empty =
+    /// the workspace's `../shared/data`
+    pub data_dir: String,
+    /// clean training sources and their noisy copies
+    pub sources: Vec<SourceSpec>,
+    /// validation sources (held-back training sources, never test models)
+    pub validation: Vec<SourceSpec>,
+    /// face count of procedural shapes (`shape:SEED`)
+    pub shape_faces: usize,
+    /// network inference batch during regeneration
+    pub inference_batch: usize,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        TrainConfig {
+            preset: "lite".into(),
+            seed: 1,
+            batch: 80,
+            lr: 1e-4,
+            lr_decay: 0.96,
+            lr_decay_steps: 5000,
+            steps: [200; 6],
+            max_seconds: [0.0; 6],
+            validate_every: 50,
+            validation_faces: 320,
+            checkpoint_seconds: 180.0,
+            warm_start: true,
+            workers: 2,
+            data_dir: String::new(),
+            sources: Vec::new(),
+            validation: Vec::new(),
+            shape_faces: 2000,
+            inference_batch: 128,
+        }
+    }
+}
+
+/// The `data/` folder next to the workspace (`../shared/data`).
+pub fn default_data_dir() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
+}
+
+/// Names of the test models that must never be trained on (SOURCES.md).
+pub const TEST_MODELS: [&str; 5] = [
+    "Fandisk0.3",
+    "Fandisk0.7",
+    "Block0.4",
+    "Twelve0.5Impulsive",
+    "Bunny0.2",
+];
+
+impl TrainConfig {
+    /// Reads a TOML config (missing fields take their defaults).
+    pub fn read(path: &Path) -> Result<TrainConfig, NetError> {
+        let text = std::fs::read_to_string(path).map_err(|e| NetError::io(path, e))?;
+        let config: TrainConfig = toml::from_str(&text).map_err(|e| NetError::BadConfig {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        config.validate(path)?;
+        Ok(config)
+    }
+
+    /// Checks ranges and that no test model is among the sources.
+    pub fn validate(&self, path: &Path) -> Result<(), NetError> {
+        let bad = |message: String| NetError::BadConfig {
+            path: path.to_path_buf(),
+            message,
+        };
+        ModelConfig::preset(&self.preset).map_err(|e| bad(e.to_string()))?;
+        if self.batch == 0 || self.workers == 0 || self.validate_every == 0 {
+            return Err(bad(
+                "batch, workers and validate_every must be positive".into()
+            ));
+        }
+        if !(self.lr > 0.0 && self.lr.is_finite()) {
+            return Err(bad(format!("lr = {} must be positive", self.lr)));
+        }
+        if self.sources.is_empty() {
+            return Err(bad("no training sources".into()));
+        }
+        for s in self.sources.iter().chain(&self.validation) {
+            if let Some(t) = TEST_MODELS.iter().find(|t| s.mesh.contains(*t)) {
+                return Err(bad(format!(
+                    "source {} is the test model {t}: never train or validate on it",
+                    s.mesh
+                )));
+            }
+            if s.gaussian.is_empty() && s.impulsive.is_empty() {
+                return Err(bad(format!("source {} has no noisy copies", s.mesh)));
+            }
+        }
+        Ok(())
+    }
+
+    /// The learning rate at global step `step` of a network.
+    pub fn lr_at(&self, step: usize) -> f64 {
+        self.lr
+            * self
+                .lr_decay
+                .powf(step as f64 / self.lr_decay_steps.max(1) as f64)
+    }
+
+    fn data_dir(&self) -> PathBuf {
+        if self.data_dir.is_empty() {
+            default_data_dir()
+        } else {
+            PathBuf::from(&self.data_dir)
+        }
+    }
+}
+
+/// A noisy/clean pair and its current state M_k.
+struct Pair {
+    name: String,
+    clean: Mesh,
+    gt: Vec<Vec3>,
+    state: Mesh,
+    regen: bool,
+}
+
+fn load_source(config: &TrainConfig, spec: &SourceSpec) -> Result<Mesh, NetError> {
+    if let Some(seed) = spec.mesh.strip_prefix("shape:") {
+        let seed: u64 = seed.parse().map_err(|_| NetError::BadConfig {
+            path: PathBuf::from("<config>"),
+            message: format!("{}: expected shape:SEED", spec.mesh),
+        })?;
+        Ok(normalnet_voxel::shapes::generate_seeded(
+            seed,
+            config.shape_faces,
+        )?)
+    } else {
+        Ok(normalnet_mesh::read_mesh(
+            config.data_dir().join(&spec.mesh),
+        )?)
+    }
+}
+
+fn make_pairs(
+    config: &TrainConfig,
+    specs: &[SourceSpec],
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<Vec<Pair>, NetError> {
+    let mut pairs = Vec::new();
+    for (i, spec) in specs.iter().enumerate() {
+        progress.message(&format!("loading {}", spec.mesh));
+        let clean = load_source(config, spec)?;
+        let gt = face_normals(&clean);
+        let mut copies: Vec<(String, NoiseParams)> = Vec::new();
+        for (j, &l) in spec.gaussian.iter().enumerate() {
+            copies.push((
+                format!("{} gaussian L={l}", spec.mesh),
+                NoiseParams {
+                    level: l,
+                    seed: seed + 1000 * i as u64 + j as u64,
+                    ..NoiseParams::default()
+                },
+            ));
+        }
+        for (j, &[l, p]) in spec.impulsive.iter().enumerate() {
+            copies.push((
+                format!("{} impulsive L={l} p={p}", spec.mesh),
+                NoiseParams {
+                    level: l,
+                    impulsive_fraction: Some(p),
+                    seed: seed + 1000 * i as u64 + 500 + j as u64,
+                    ..NoiseParams::default()
+                },
+            ));
+        }
+        for (name, noise) in copies {
+            let noisy = add_noise(&clean, &noise)?;
+            pairs.push(Pair {
+                name,
+                clean: clean.clone(),
+                gt: gt.clone(),
+                state: noisy,
+                regen: spec.regen,
+            });
+        }
+    }
+    Ok(pairs)
+}
+
+/// Per-network progress, saved in `OUT/state.toml` for `--resume`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct RunState {
+    /// networks finished (their best weights are `OUT/netK.bpk`)
+    finished: usize,
+    /// the manifest entries of finished networks
+    networks: Vec<NetworkInfo>,
+    /// step reached in the network being trained (checkpoint)
+    step: usize,
+    /// best validation error so far in that network
+    best_val: f64,
+    /// seconds spent so far in that network
+    seconds: f64,
+    /// losses summed for the manifest's mean
+    loss_tail: Vec<f64>,
+}
+
+/// Trains the six networks of `config` into `out` and writes the bundle
+/// there (`net1.bpk`…`net6.bpk` + `manifest.toml`, `train_log.csv`,
+/// `loss.png`). With `resume`, continues from `out/state.toml`.
+///
+/// # Errors
+/// Unreadable sources, invalid configuration, I/O errors.
+pub fn train(
+    config: &TrainConfig,
+    out: &Path,
+    resume: bool,
+    progress: &dyn Progress,
+) -> Result<Manifest, NetError> {
+    config.validate(Path::new("<config>"))?;
+    let run_start = Instant::now();
+    std::fs::create_dir_all(out.join("checkpoint")).map_err(|e| NetError::io(out, e))?;
+    std::fs::create_dir_all(out.join("states")).map_err(|e| NetError::io(out, e))?;
+    let state_path = out.join("state.toml");
+    let mut run = if resume && state_path.is_file() {
+        let text =
+            std::fs::read_to_string(&state_path).map_err(|e| NetError::io(&state_path, e))?;
+        toml::from_str::<RunState>(&text).map_err(|e| NetError::BadConfig {
+            path: state_path.clone(),
+            message: e.to_string(),
+        })?
+    } else {
+        RunState {
+            best_val: f64::INFINITY,
+            ..RunState::default()
+        }
+    };
+    write_atomically(
+        &out.join("config.toml"),
+        toml::to_string_pretty(config)
+            .unwrap_or_default()
+            .as_bytes(),
+    )?;
+    let model_config = ModelConfig::preset(&config.preset)?;
+    let voxel = match config.preset.as_str() {
+        "paper" => VoxelParams::paper(),
+        "tiny" => VoxelParams::tiny(),
+        _ => VoxelParams::lite(),
+    };
+    let plain = Device::flex();
+    let device = Device::flex().autodiff();
+    let mut pairs = make_pairs(config, &config.sources, config.seed, progress)?;
+    let mut val_pairs = make_pairs(config, &config.validation, config.seed + 777, progress)?;
+    let log_path = out.join("train_log.csv");
+    if !log_path.is_file() || !resume {
+        write_atomically(&log_path, b"network,step,lr,loss,val_deg,seconds\n")?;
+    }
+    let mut networks: Vec<NormalNet> = Vec::new();
+    for k in 0..run.finished {
+        networks.push(load_network(
+            &model_config,
+            &config.preset,
+            &out.join(crate::bundle::network_file(k)),
+            &plain,
+        )?);
+    }
+    // restore the mesh states M_{a_k} of the first unfinished network
+    if run.finished > 0 {
+        let stage = run.finished;
+        for (i, p) in pairs.iter_mut().chain(val_pairs.iter_mut()).enumerate() {
+            let file = out.join("states").join(format!("stage{stage}_{i}.obj"));
+            if file.is_file() {
+                let m = normalnet_mesh::read_mesh(&file)?;
+                if m.faces == p.state.faces && m.num_vertices() == p.state.num_vertices() {
+                    p.state = m;
+                }
+            }
+        }
+    }
+    let mut total_pool = 0;
+    for k in run.finished..INTERVALS.len() {
+        let net_start = Instant::now();
+        progress.message(&format!("network {}: building samples", k + 1));
+        let sources: Vec<SampleSource> = pairs
+            .iter()
+            .map(|p| SampleSource::new(p.state.clone(), &p.clean, voxel, &MU_GS))
+            .collect::<Result<_, _>>()?;
+        let sources = Arc::new(sources);
+        let sampler = BalancedSampler::new(sources.iter());
+        let pool_faces: usize = sampler.category_sizes().iter().sum();
+        total_pool = pool_faces;
+        let val = validation_set(&val_pairs, voxel, config, k)?;
+        // model: resume checkpoint, else warm start, else fresh
+        let ckpt_model = out.join("checkpoint").join("model.bpk");
+        let ckpt_optim = out.join("checkpoint").join("optim.bpk");
+        let mut optim: ModuleOptimizer = adam();
+        let resuming = resume && run.step > 0 && ckpt_model.is_file();
+        let mut model = if resuming {
+            let m = model_config
+                .init(&device, config.seed + k as u64)
+                .try_load_file(&ckpt_model)
+                .map_err(|e| NetError::Record {
+                    path: ckpt_model.clone(),
+                    message: e.to_string(),
+                })?;
+            if ckpt_optim.is_file() {
+                optim = optim.load(&ckpt_optim).map_err(|e| NetError::Record {
+                    path: ckpt_optim.clone(),
+                    message: e.to_string(),
+                })?;
+            }
+            m
+        } else {
+            run.step = 0;
+            run.best_val = f64::INFINITY;
+            run.seconds = 0.0;
+            run.loss_tail.clear();
+            if config.warm_start && k > 0 {
+                model_config
+                    .init(&device, config.seed + k as u64)
+                    .try_load_file(out.join(crate::bundle::network_file(k - 1)))
+                    .map_err(|e| NetError::Record {
+                        path: out.join(crate::bundle::network_file(k - 1)),
+                        message: e.to_string(),
+                    })?
+                    .train()
+            } else {
+                model_config.init(&device, config.seed + k as u64)
+            }
+        };
+        let steps = config.steps[k];
+        let items = sampler.draw_count_seeded(steps * config.batch, config.seed + 10 * k as u64);
+        let skip = (run.step * config.batch).min(items.len());
+        let loader = Loader::new(
+            Arc::clone(&sources),
+            items[skip..].to_vec(),
+            LoaderConfig {
+                batch_size: config.batch,
+                workers: config.workers,
+                prefetch: 3,
+                seed: config.seed + 100 * k as u64 + run.step as u64,
+                yaw_augmentation: true,
+                keep_last: false,
+            },
+        )?;
+        let baseline = val.baseline_deg;
+        if run.best_val.is_infinite() {
+            let e = validation_error(&model, &val, &plain);
+            run.best_val = e;
+            save_network(&model, &out.join(crate::bundle::network_file(k)))?;
+            append_log(
+                &log_path,
+                k,
+                run.step,
+                config.lr_at(run.step),
+                f64::NAN,
+                e,
+                run.seconds,
+            )?;
+        }
+        progress.start(&format!("network {}", k + 1), steps as u64);
+        progress.advance(run.step as u64);
+        let mut last_ckpt = Instant::now();
+        let seconds_before = run.seconds;
+        let limit = config.max_seconds[k];
+        let mut batch_buf = SampleBatch::with_capacity(voxel.side(), config.batch);
+        for b in loader {
+            let lr = config.lr_at(run.step);
+            batch_buf.len = b.len();
+            batch_buf.grids = b.grids;
+            batch_buf.targets = b.targets;
+            let (m, loss) = train_step(model, &mut optim, &batch_buf, lr, &device);
+            model = m;
+            run.step += 1;
+            run.seconds = seconds_before + net_start.elapsed().as_secs_f64();
+            run.loss_tail.push(loss);
+            if run.loss_tail.len() > 50 {
+                run.loss_tail.remove(0);
+            }
+            progress.advance(1);
+            let mut val_err = f64::NAN;
+            let time_up = limit > 0.0 && run.seconds >= limit;
+            if run.step % config.validate_every == 0 || run.step == steps || time_up {
+                val_err = validation_error(&model, &val, &plain);
+                if val_err < run.best_val {
+                    run.best_val = val_err;
+                    save_network(&model, &out.join(crate::bundle::network_file(k)))?;
+                }
+            }
+            progress.message(&format!(
+                "net {} step {} loss {loss:.4} val {:.2}° (best {:.2}°, input {baseline:.2}°)",
+                k + 1,
+                run.step,
+                if val_err.is_nan() {
+                    run.best_val
+                } else {
+                    val_err
+                },
+                run.best_val
+            ));
+            append_log(&log_path, k, run.step, lr, loss, val_err, run.seconds)?;
+            if last_ckpt.elapsed().as_secs_f64() >= config.checkpoint_seconds {
+                checkpoint(&model, &optim, out, &run)?;
+                last_ckpt = Instant::now();
+            }
+            if time_up {
+                break;
+            }
+        }
+        progress.finish();
+        // network k done: record it, then regenerate M for the next interval
+        let best = load_network(
+            &model_config,
+            &config.preset,
+            &out.join(crate::bundle::network_file(k)),
+            &plain,
+        )?;
+        let info = NetworkInfo {
+            file: crate::bundle::network_file(k),
+            interval: Manifest::default_intervals()[k],
+            steps: run.step,
+            samples_seen: run.step * config.batch,
+            pool_faces,
+            epochs: (run.step * config.batch) as f64 / pool_faces.max(1) as f64,
+            train_seconds: run.seconds,
+            train_loss: mean(&run.loss_tail),
+            validation_error_deg: run.best_val,
+            validation_baseline_deg: baseline,
+        };
+        networks.push(best);
+        run.networks.truncate(k);
+        run.networks.push(info);
+        if k + 1 < INTERVALS.len() {
+            let passes = INTERVALS[k + 1].0 - INTERVALS[k].0;
+            progress.message(&format!("regenerating meshes with network {}", k + 1));
+            regenerate(
+                &mut pairs,
+                &networks[k],
+                voxel,
+                passes,
+                config.inference_batch,
+                &plain,
+                progress,
+            )?;
+            regenerate(
+                &mut val_pairs,
+                &networks[k],
+                voxel,
+                passes,
+                config.inference_batch,
+                &plain,
+                progress,
+            )?;
+            for (i, p) in pairs.iter().chain(val_pairs.iter()).enumerate() {
+                normalnet_mesh::write_mesh(
+                    out.join("states").join(format!("stage{}_{i}.obj", k + 1)),
+                    &p.state,
+                )?;
+            }
+        }
+        run.finished = k + 1;
+        run.step = 0;
+        run.best_val = f64::INFINITY;
+        run.seconds = 0.0;
+        run.loss_tail.clear();
+        save_state(out, &run)?;
+        let _ = std::fs::remove_file(&ckpt_model);
+        let _ = std::fs::remove_file(&ckpt_optim);
+    }
+    // the manifest
+    let mut manifest = new_manifest(&config.preset)?;
+    manifest.voxel = voxel;
+    manifest.networks = run.networks.clone();
+    manifest.training = crate::bundle::TrainingInfo {
+        sources: pairs.iter().map(|p| p.name.clone()).collect(),
+        validation: val_pairs.iter().map(|p| p.name.clone()).collect(),
+        noise: "Gaussian along clean vertex normals, σ = L·l_e, and impulsive (fraction p of vertices); seeds = seed + 1000·source + copy".into(),
+        seed: config.seed,
+        batch: config.batch,
+        learning_rate: format!(
+            "{} × {}^(step/{}) per network, Adam(0.9, 0.999, 1e-8), MSE",
+            config.lr, config.lr_decay, config.lr_decay_steps
+        ),
+        regeneration: format!(
+            "M_(k+1) from network k at μ_g {REGEN_MU_G}, N_v {REGEN_VERTEX_ITERATIONS}: CNN on {} (regen = true), oracle GT-guided GNF pass (μ_g 0.4, σ_s 2·d_s) on the others and on the validation meshes",
+            pairs.iter().filter(|p| p.regen).map(|p| p.name.as_str()).collect::<Vec<_>>().join("; ")
+        ),
+        notes: format!(
+            "steps per network {:?}, wall-clock limits {:?} s, warm start {}, validation = mean angle (deg) of the μ_g 0.35 output vs its target on {} balanced faces (yaw 0); last sample pool {} faces; total run {:.0} s",
+            config.steps, config.max_seconds, config.warm_start, config.validation_faces, total_pool,
+            run_start.elapsed().as_secs_f64()
+        ),
+    };
+    manifest.write(&out.join(MANIFEST))?;
+    crate::plot::loss_curve_png(&log_path, &out.join("loss.png"))?;
+    Ok(manifest)
+}
+
+fn mean(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        v.iter().sum::<f64>() / v.len() as f64
+    }
+}
+
+fn append_log(
+    path: &Path,
+    k: usize,
+    step: usize,
+    lr: f64,
+    loss: f64,
+    val: f64,
+    seconds: f64,
+) -> Result<(), NetError> {
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| NetError::io(path, e))?;
+    let fmt = |x: f64| {
+        if x.is_finite() {
+            format!("{x:.6}")
+        } else {
+            String::new()
+        }
+    };
+    writeln!(
+        f,
+        "{},{step},{lr:.3e},{},{},{seconds:.1}",
+        k + 1,
+        fmt(loss),
+        fmt(val)
+    )
+    .map_err(|e| NetError::io(path, e))
+}
+
+fn save_state(out: &Path, run: &RunState) -> Result<(), NetError> {
+    let mut r = run.clone();
+    if !r.best_val.is_finite() {
+        r.best_val = 1e9;
+    }
+    let text = toml::to_string_pretty(&r).map_err(|e| NetError::BadConfig {
+        path: out.join("state.toml"),
+        message: e.to_string(),
+    })?;
+    write_atomically(&out.join("state.toml"), text.as_bytes())
+}
+
+fn checkpoint(
+    model: &NormalNet,
+    optim: &ModuleOptimizer,
+    out: &Path,
+    run: &RunState,
+) -> Result<(), NetError> {
+    let dir = out.join("checkpoint");
+    let tmp = dir.join("model.tmp.bpk");
+    model
+        .clone()
+        .save_file(&tmp)
+        .map_err(|e| NetError::Record {
+            path: tmp.clone(),
+            message: e.to_string(),
+        })?;
+    std::fs::rename(&tmp, dir.join("model.bpk")).map_err(|e| NetError::io(&dir, e))?;
+    let tmp = dir.join("optim.tmp.bpk");
+    optim.save(&tmp).map_err(|e| NetError::Record {
+        path: tmp.clone(),
+        message: e.to_string(),
+    })?;
+    std::fs::rename(&tmp, dir.join("optim.bpk")).map_err(|e| NetError::io(&dir, e))?;
+    save_state(out, run)
+}
+
+/// Fixed validation faces of one stage: grids (yaw 0) and targets.
+struct ValidationSet {
+    batch: SampleBatch,
+    baseline_deg: f64,
+}
+
+fn validation_set(
+    pairs: &[Pair],
+    voxel: VoxelParams,
+    config: &TrainConfig,
+    k: usize,
+) -> Result<ValidationSet, NetError> {
+    let sources: Vec<SampleSource> = pairs
+        .iter()
+        .map(|p| SampleSource::new(p.state.clone(), &p.clean, voxel, &MU_GS))
+        .collect::<Result<_, _>>()?;
+    let sampler = BalancedSampler::new(sources.iter());
+    let items = sampler.draw_count_seeded(config.validation_faces, config.seed + 99 + k as u64);
+    let mut batch = SampleBatch::with_capacity(voxel.side(), items.len());
+    let grid_len = voxel.grid_len();
+    let mut baseline = 0.0;
+    for it in &items {
+        let src = &sources[it.source as usize];
+        let start = batch.grids.len();
+        batch.grids.resize(start + grid_len, 0.0);
+        let t = src.sample(it.face as usize, 0.0, &mut batch.grids[start..]);
+        batch.targets.extend_from_slice(&t);
+        let current = src.voxelizer().geometry().normals[it.face as usize];
+        let target = src.world_targets(it.face as usize)[VALIDATION_SLOT];
+        baseline += vec3::angle(current, target).to_degrees();
+    }
+    batch.len = items.len();
+    Ok(ValidationSet {
+        baseline_deg: baseline / items.len().max(1) as f64,
+        batch,
+    })
+}
+
+/// Mean angle (degrees) between the μ_g-0.35 output and its target.
+fn validation_error(model: &NormalNet, val: &ValidationSet, plain: &Device) -> f64 {
+    if val.batch.len == 0 {
+        return f64::NAN;
+    }
+    let net = model.valid().fork(plain);
+    let side = val.batch.side;
+    let grid_len = val.batch.grid_len();
+    let mut sum = 0.0;
+    for start in (0..val.batch.len).step_by(64) {
+        let end = (start + 64).min(val.batch.len);
+        let out = tensor_to_vec(net.forward(grids_tensor(
+            &val.batch.grids[start * grid_len..end * grid_len],
+            end - start,
+            side,
+            plain,
+        )));
+        for i in 0..end - start {
+            let o = &out[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
+            let t = &val.batch.targets[(start + i) * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
+            let o = [o[0] as f64, o[1] as f64, o[2] as f64];
+            let t = [t[0] as f64, t[1] as f64, t[2] as f64];
+            let a = if vec3::norm(o) == 0.0 {
+                90.0
+            } else {
+                vec3::angle(o, t).to_degrees()
+            };
+            sum += a;
+        }
+    }
+    sum / val.batch.len as f64
+}
+
+/// Runs `passes` filtering iterations on every pair's state: network `net`
+/// for pairs marked `regen`, the GT-guided oracle for the others.
+fn regenerate(
+    pairs: &mut [Pair],
+    net: &NormalNet,
+    voxel: VoxelParams,
+    passes: usize,
+    batch: usize,
+    device: &Device,
+    progress: &dyn Progress,
+) -> Result<(), NetError> {
+    let slot = crate::bundle::nearest_mu_g(&MU_GS, REGEN_MU_G);
+    for p in pairs.iter_mut() {
+        progress.message(&format!("regenerating {} ({} passes)", p.name, passes));
+        if p.regen {
+            let topology = Topology::new(p.state.num_vertices(), &p.state.faces);
+            let mut positions = p.state.positions.clone();
+            let mut buffers = normalnet_filters::VertexUpdateBuffers::default();
+            for _ in 0..passes {
+                let current = p.state.with_positions(positions.clone());
+                let (normals, _) = filtered_normals(
+                    &current,
+                    &topology,
+                    net,
+                    voxel,
+                    slot,
+                    batch,
+                    device,
+                    None,
+                    &NoProgress,
+                )?;
+                normalnet_filters::vertex_update_in_place(
+                    &mut positions,
+                    &p.state.faces,
+                    &topology,
+                    &normals,
+                    REGEN_VERTEX_ITERATIONS,
+                    &mut buffers,
+                );
+            }
+            p.state = p.state.with_positions(positions);
+        } else {
+            let params = GtGuidedGnfParams {
+                mu_g: REGEN_MU_G,
+                iterations: passes,
+                vertex_iterations: REGEN_VERTEX_ITERATIONS,
+                ..GtGuidedGnfParams::default()
+            };
+            p.state = gt_guided_gnf(&p.state, &p.gt, &params, &NoProgress)?;
+        }
+    }
+    Ok(())
+}
