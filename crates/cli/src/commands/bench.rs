@@ -438,6 +438,8 @@ struct Panel {
     label: String,
     mesh: Mesh,
     errors: Option<Vec<f64>>,
+    /// E_a of a ranked method's result (chooses the colour scale)
+    ranked_e_a: Option<f64>,
 }
 
 /// Renders the panels of one model side by side with a shared camera (the
@@ -449,24 +451,28 @@ fn model_picture(
     args: &Args,
     view: (f64, f64),
 ) -> anyhow::Result<Image> {
-    // the scale follows the methods' errors (the noisy input would wash them out)
-    let method_errors: Vec<f64> = panels
+    // the scale fits the best ranked method (95th percentile of its errors,
+    // rounded up), so differences between good results stay visible; worse
+    // results and the noisy input saturate towards red
+    let best = panels
         .iter()
-        .filter(|p| p.label.split('\n').next() != Some(NOISY))
-        .filter_map(|p| p.errors.as_ref())
-        .flatten()
-        .copied()
-        .collect();
-    let max = if method_errors.is_empty() {
-        let all: Vec<f64> = panels
-            .iter()
-            .filter_map(|p| p.errors.as_ref())
-            .flatten()
-            .copied()
-            .collect();
-        nice_error_scale(&all)
-    } else {
-        nice_error_scale(&method_errors)
+        .filter(|p| p.errors.is_some() && p.ranked_e_a.is_some())
+        .min_by(|a, b| {
+            a.ranked_e_a
+                .partial_cmp(&b.ranked_e_a)
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+    let max = match best.and_then(|p| p.errors.as_ref()) {
+        Some(errors) => nice_error_scale(errors),
+        None => {
+            let all: Vec<f64> = panels
+                .iter()
+                .filter_map(|p| p.errors.as_ref())
+                .flatten()
+                .copied()
+                .collect();
+            nice_error_scale(&all)
+        }
     };
     let base = RenderOptions {
         width: args.panel_size.0,
@@ -498,7 +504,7 @@ fn model_picture(
     let bar = ColourBar::for_height(max, grid.height().min(2 * args.panel_size.1), "error (deg)");
     let body = append_colour_bar(&grid, &bar);
     let scale = (body.width() / 600).clamp(1, 3);
-    let title_h = 8 * scale + 16;
+    let title_h = 8 * scale + 24;
     let mut out = Image::new(body.width(), body.height() + title_h, [255, 255, 255]);
     draw_lines(
         &mut out,
@@ -632,6 +638,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                         label: format!("{NOISY}\nE_a {:.2} deg", m.e_a_deg),
                         mesh: noisy.clone(),
                         errors,
+                        ranked_e_a: None,
                     });
                 }
             }
@@ -709,6 +716,8 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                             label: format!("{method}\nE_a {:.2} deg", metrics.e_a_deg),
                             errors: per_face_angle_errors(&gt, &result).ok(),
                             mesh: result,
+                            ranked_e_a: (!report.unranked.contains(method))
+                                .then_some(metrics.e_a_deg),
                         });
                     }
                     report.records.push(record_from(
@@ -739,6 +748,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 label: "ground truth\n ".into(),
                 mesh: gt.clone(),
                 errors: None,
+                ranked_e_a: None,
             });
             let view = settings.view(model).unwrap_or(args.view);
             let file = format!("{model}.png");
