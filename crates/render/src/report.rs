@@ -232,6 +232,15 @@ impl BenchReport {
     }
 }
 
+/// "the noisy input is" / "the noisy input and X are".
+fn unranked_phrase(report: &BenchReport) -> String {
+    if report.unranked.is_empty() {
+        "the noisy input is".to_string()
+    } else {
+        format!("the noisy input and {} are", report.unranked.join(", "))
+    }
+}
+
 fn md_escape(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
 }
@@ -254,11 +263,7 @@ pub fn table_markdown(report: &BenchReport) -> String {
         "Best method per row in **bold** ({} shown for reference and not ranked). \
          E_a: mean face-normal angle error in degrees; E_v / l_e: area-weighted RMS vertex distance \
          to the ground-truth surface over its mean edge length; time: the denoising call alone.\n",
-        if report.unranked.is_empty() {
-            "the noisy input is".to_string()
-        } else {
-            format!("the noisy input and {} are", report.unranked.join(", "))
-        }
+        unranked_phrase(report)
     );
     let _ = writeln!(s, "| model | noise | metric | {} |", cols.join(" | "));
     let _ = writeln!(s, "|---|---|---|{}", "---:|".repeat(cols.len()));
@@ -451,10 +456,11 @@ pub fn index_html(report: &BenchReport) -> String {
          body{{font-family:sans-serif;margin:2em;color:#222}} table{{border-collapse:collapse}} \
          td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}} td.l,th.l{{text-align:left}} \
          tr.first td{{border-top:2px solid #555}} .fail{{color:#b00}} img{{max-width:100%;border:1px solid #ddd}} \
-         </style></head><body>\n<h1>{title}</h1>\n<p>Best method per row in <b>bold</b>; the noisy input is \
+         </style></head><body>\n<h1>{title}</h1>\n<p>Best method per row in <b>bold</b>; {who} \
          shown for reference and not ranked. E<sub>a</sub>: mean face-normal angle error (degrees); \
          E<sub>v</sub>/l<sub>e</sub>: area-weighted RMS vertex distance to the ground-truth surface over its \
-         mean edge length; time: the denoising call alone (seconds).</p>"
+         mean edge length; time: the denoising call alone (seconds).</p>",
+        who = html_escape(&unranked_phrase(report))
     );
     let _ = write!(
         s,
