@@ -108,6 +108,18 @@ fn benches(c: &mut Criterion) {
     group.bench_function("sphere1m_binary_ply_load_normals_topology", |b| {
         b.iter(|| black_box(load_geometry_topology(&ply)))
     });
+    group.bench_function("sphere1m_obj_read_only", |b| {
+        b.iter(|| black_box(read_mesh(&obj).expect("read")))
+    });
+    group.bench_function("sphere1m_binary_ply_read_only", |b| {
+        b.iter(|| black_box(read_mesh(&ply).expect("read")))
+    });
+    group.bench_function("sphere1m_face_geometry", |b| {
+        b.iter(|| black_box(FaceGeometry::new(&big)))
+    });
+    group.bench_function("sphere1m_topology", |b| {
+        b.iter(|| black_box(Topology::new(big.num_vertices(), &big.faces)))
+    });
     group.bench_function("sphere1m_obj_write", |b| {
         b.iter(|| write_mesh(&obj, &big).expect("write"))
     });
