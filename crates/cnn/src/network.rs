@@ -11,7 +11,6 @@ use rayon::prelude::*;
 struct FoldedLinear {
     w: Vec<f32>,
     b: Vec<f32>,
-    inputs: usize,
     outputs: usize,
 }
 
@@ -31,12 +30,7 @@ impl FoldedLinear {
         let b = (0..no)
             .map(|o| l.bias.as_ref().map_or(0.0, |b| b[o]) * scale[o] + shift[o])
             .collect();
-        FoldedLinear {
-            w,
-            b,
-            inputs: ni,
-            outputs: no,
-        }
+        FoldedLinear { w, b, outputs: no }
     }
 
     fn run(&self, x: &[f32], out: &mut [f32]) {
@@ -57,8 +51,6 @@ struct Block {
     a: FoldedConv,
     b: FoldedConv,
     shortcut: FoldedConv,
-    /// input side
-    n: usize,
     /// output side
     m: usize,
 }
@@ -159,7 +151,6 @@ impl Cnn {
                 a: FoldedConv::new(&bw.conv_a, &bw.bn_a),
                 b: FoldedConv::new(&bw.conv_b, &bw.bn_b),
                 shortcut: FoldedConv::new(&bw.shortcut, &bw.bn_shortcut),
-                n,
                 m,
             });
             largest = largest.max(m.pow(3) * cout);
