@@ -262,7 +262,7 @@ pub fn point_surface_distances(points: &[Vec3], mesh: &Mesh) -> Vec<f64> {
 
 /// `l_e` (mean length over unique edges) without building a [`crate::Topology`]:
 /// the same edges as `Topology::edges`, summed in the same sorted order.
-fn unique_edge_mean_length(m: &Mesh) -> f64 {
+pub(crate) fn unique_edge_mean_length(m: &Mesh) -> f64 {
     let mut keys: Vec<u64> = Vec::with_capacity(3 * m.num_faces());
     for t in &m.faces {
         for k in 0..3 {

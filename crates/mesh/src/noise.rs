@@ -14,9 +14,8 @@
 //! seed gives the same bytes on every machine and thread count.
 
 use crate::error::MeshError;
-use crate::geometry::{face_normals, mean_edge_length, vertex_normals};
+use crate::geometry::{face_normals, vertex_normals};
 use crate::mesh::Mesh;
-use crate::topology::Topology;
 use crate::vec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -102,7 +101,8 @@ pub fn add_noise_with_info(
         });
     }
     let n = clean.num_vertices();
-    let le = mean_edge_length(clean, &Topology::new(n, &clean.faces));
+    // l_e from the sorted unique edges (no full Topology needed).
+    let le = crate::metrics::unique_edge_mean_length(clean);
     let sigma = params.level * le;
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     let chosen: Vec<usize> = match params.impulsive_fraction {
