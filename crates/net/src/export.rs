@@ -150,6 +150,44 @@ pub fn net_weights(net: &NormalNet, config: &ModelConfig) -> Result<NetWeights, 
     })
 }
 
+/// The architecture numbers of `net`, read from its tensor shapes, for
+/// grids of side `grid`.
+///
+/// # Errors
+/// [`ExportError`] when the network lacks a tensor of the SPEC §6 layout.
+pub fn config_of(net: &NormalNet, grid: usize) -> Result<ModelConfig, ExportError> {
+    let mut c = Collector::default();
+    net.visit(&mut c);
+    let first = |c: &Collector, path: &str| {
+        c.tensors
+            .get(path)
+            .map(|(dims, _)| dims[0])
+            .ok_or_else(|| ExportError(format!("tensor {path} missing")))
+    };
+    Ok(ModelConfig {
+        grid,
+        channels: [
+            first(&c, "blocks.0.conv_a.weight")?,
+            first(&c, "blocks.1.conv_a.weight")?,
+            first(&c, "blocks.2.conv_a.weight")?,
+        ],
+        hidden: [
+            first(&c, "fc.0.bias")?,
+            first(&c, "fc.1.bias")?,
+            first(&c, "fc.2.bias")?,
+        ],
+        outputs: first(&c, "out.bias")?,
+    })
+}
+
+/// `net` compiled for the fast CPU engine, for grids of side `grid`.
+///
+/// # Errors
+/// As [`net_weights`].
+pub fn compile_for_grid(net: &NormalNet, grid: usize) -> Result<Cnn, ExportError> {
+    compile(net, &config_of(net, grid)?)
+}
+
 /// `net` compiled for the fast CPU engine.
 ///
 /// # Errors

@@ -22,7 +22,6 @@ use serde::Serialize;
 
 use crate::NetError;
 use crate::bundle::{Bundle, network_for_iteration};
-use crate::data::{grids_tensor, tensor_to_vec};
 use crate::model::{NUM_OUTPUTS, NormalNet};
 
 /// Settings of [`denoise`]; `Default` is SPEC §7.
@@ -156,7 +155,9 @@ pub fn denoise(
 ///
 /// `yaws` (one per face, radians) rotates each face's frame about its local
 /// y axis; `None` = no yaw (what [`denoise`] uses). `progress` advances by
-/// one per face.
+/// one per face. The network runs on the burn-free CPU engine
+/// (`normalnet-cnn`, compiled from `net` per call); `_device` is where `net`
+/// lives and is not needed for that.
 ///
 /// # Errors
 /// Voxelizer errors (degenerate scale) and [`NetError::NonFiniteOutput`].
@@ -168,17 +169,24 @@ pub fn filtered_normals(
     voxel: VoxelParams,
     slot: usize,
     batch: usize,
-    device: &Device,
+    _device: &Device,
     yaws: Option<&[f64]>,
     progress: &dyn Progress,
 ) -> Result<(Vec<Vec3>, StageTimes), NetError> {
     let mut times = StageTimes::default();
     let t = Instant::now();
     let voxelizer = Voxelizer::new(mesh, topology, voxel)?;
+    // Inference runs on the burn-free CPU engine (same outputs as
+    // `net.forward` to ~1e-6, several times faster than burn Flex).
+    let cnn = crate::export::compile_for_grid(net, voxel.side()).map_err(|e| {
+        NetError::InvalidParameter {
+            name: "network",
+            message: e.to_string(),
+        }
+    })?;
     let fallback = face_normals(mesh);
     times.voxelize_s += t.elapsed().as_secs_f64();
     let n = mesh.num_faces();
-    let side = voxel.side();
     let grid_len = voxel.grid_len();
     let batch = batch.max(1);
     let mut normals = vec![[0.0; 3]; n];
@@ -220,7 +228,12 @@ pub fn filtered_normals(
             times.voxelize_s += dt;
             let t = Instant::now();
             let len = frames.len();
-            let out = tensor_to_vec(net.forward(grids_tensor(&buf, len, side, device)));
+            let mut out = vec![0.0f32; len * NUM_OUTPUTS];
+            cnn.forward(&buf, &mut out)
+                .map_err(|e| NetError::InvalidParameter {
+                    name: "network",
+                    message: e.to_string(),
+                })?;
             empty_tx.send(buf).ok();
             for (i, frame) in frames.iter().enumerate() {
                 let f = start + i;
@@ -244,4 +257,159 @@ pub fn filtered_normals(
     });
     result?;
     Ok((normals, times))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ModelConfig;
+    use crate::bundle::{new_manifest, save_bundle};
+    use normalnet_mesh::NoProgress;
+    use normalnet_voxel::frame::{Mat3, mat_vec};
+
+    fn shape() -> Mesh {
+        normalnet_voxel::shapes::generate_seeded(3, 400).unwrap()
+    }
+
+    fn transform(mesh: &Mesh, r: &Mat3, scale: f64, shift: Vec3) -> Mesh {
+        let p = mesh
+            .positions
+            .iter()
+            .map(|&x| vec3::add(vec3::scale(mat_vec(r, x), scale), shift))
+            .collect();
+        mesh.with_positions(p)
+    }
+
+    /// Rotation by `angle` about the unit `axis` (Rodrigues).
+    fn rotation(axis: Vec3, angle: f64) -> Mat3 {
+        let [x, y, z] = vec3::normalize_or_zero(axis);
+        let (s, c) = angle.sin_cos();
+        let t = 1.0 - c;
+        [
+            [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+        ]
+    }
+
+    fn run(mesh: &Mesh, net: &NormalNet, yaws: Option<&[f64]>) -> Vec<Vec3> {
+        let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+        filtered_normals(
+            mesh,
+            &topology,
+            net,
+            VoxelParams::tiny(),
+            2,
+            64,
+            &Device::flex(),
+            yaws,
+            &NoProgress,
+        )
+        .unwrap()
+        .0
+    }
+
+    fn angles_deg(a: &[Vec3], b: &[Vec3]) -> Vec<f64> {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| vec3::angle(*x, *y).to_degrees())
+            .collect()
+    }
+
+    #[test]
+    fn outputs_are_unit_and_invariant_to_translation_and_scale() {
+        let net = ModelConfig::tiny().init(&Device::flex(), 7);
+        let mesh = shape();
+        let a = run(&mesh, &net, None);
+        assert_eq!(a.len(), mesh.num_faces());
+        assert!(a.iter().all(|n| (vec3::norm(*n) - 1.0).abs() < 1e-9));
+        let moved = transform(&mesh, &IDENTITY, 3.5, [10.0, -4.0, 2.0]);
+        let b = run(&moved, &net, None);
+        let err = angles_deg(&a, &b);
+        let mean = err.iter().sum::<f64>() / err.len() as f64;
+        assert!(mean < 0.05, "mean change {mean}°");
+    }
+
+    const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+    /// The frame aligns the 2-ring mean normal with y and leaves the yaw
+    /// free, so rotating the mesh by R is exactly the same as keeping it and
+    /// turning each face's grid by the yaw φ_f = yaw of `W'_f · R · W_fᵀ`.
+    /// Outputs must then be the rotated outputs: this checks that the
+    /// network outputs are rotated back with the right `W_rᵀ`. (An untrained
+    /// network is not yaw-invariant, so without the yaws they would differ.)
+    #[test]
+    fn rotating_the_mesh_rotates_the_outputs_modulo_the_free_yaw() {
+        let net = ModelConfig::tiny().init(&Device::flex(), 8);
+        let mesh = shape();
+        let r = rotation([0.3, -0.5, 0.8], 1.1);
+        let rotated = transform(&mesh, &r, 1.0, [0.0; 3]);
+        let topo = Topology::new(mesh.num_vertices(), &mesh.faces);
+        let v = Voxelizer::new(&mesh, &topo, VoxelParams::tiny()).unwrap();
+        let vr = Voxelizer::new(&rotated, &topo, VoxelParams::tiny()).unwrap();
+        let yaws: Vec<f64> = (0..mesh.num_faces())
+            .map(|f| {
+                let w = v.frame(f, 0.0).rotation;
+                let wr = vr.frame(f, 0.0).rotation;
+                // M = W'_f R W_fᵀ, a rotation about y by φ: M[0][2] = sin φ, M[0][0] = cos φ
+                let m = |i: usize, j: usize| {
+                    (0..3)
+                        .map(|a| (0..3).map(|b| wr[i][a] * r[a][b] * w[j][b]).sum::<f64>())
+                        .sum::<f64>()
+                };
+                assert!((m(1, 1) - 1.0).abs() < 1e-9, "not a yaw");
+                m(0, 2).atan2(m(0, 0))
+            })
+            .collect();
+        let base = run(&mesh, &net, Some(&yaws));
+        let expected: Vec<Vec3> = base.iter().map(|n| mat_vec(&r, *n)).collect();
+        let got = run(&rotated, &net, None);
+        let err = angles_deg(&expected, &got);
+        let mean = err.iter().sum::<f64>() / err.len() as f64;
+        assert!(mean < 0.05, "mean deviation {mean}°");
+        // and the yaw matters for an untrained network: without it the
+        // outputs are not simply rotated
+        let plain: Vec<Vec3> = run(&mesh, &net, None)
+            .iter()
+            .map(|n| mat_vec(&r, *n))
+            .collect();
+        let off = angles_deg(&plain, &got);
+        assert!(off.iter().sum::<f64>() / off.len() as f64 > 0.05);
+    }
+
+    #[test]
+    fn denoise_runs_every_interval_without_nan() {
+        let device = Device::flex();
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = new_manifest("tiny").unwrap();
+        let nets: Vec<NormalNet> = (0..6)
+            .map(|i| ModelConfig::tiny().init(&device, i))
+            .collect();
+        save_bundle(dir.path(), &manifest, &nets).unwrap();
+        let bundle = Bundle::load(dir.path(), &device).unwrap();
+        let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+        let params = DenoiseParams {
+            iterations: 11,
+            vertex_iterations: 2,
+            batch: 50,
+            ..DenoiseParams::default()
+        };
+        let (out, times) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();
+        assert_eq!(out.faces, mesh.faces);
+        assert!(out.positions.iter().flatten().all(|x| x.is_finite()));
+        assert_ne!(out.positions, mesh.positions);
+        assert_eq!(times.faces_processed, 11 * mesh.num_faces());
+        assert!(times.cnn_s > 0.0 && times.total_s >= times.cnn_s);
+        let bad = DenoiseParams {
+            iterations: 0,
+            ..DenoiseParams::default()
+        };
+        assert!(matches!(
+            denoise(&mesh, &bundle, &bad, &NoProgress),
+            Err(NetError::InvalidParameter {
+                name: "iterations",
+                ..
+            })
+        ));
+    }
 }

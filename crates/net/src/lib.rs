@@ -7,6 +7,7 @@
 pub mod bundle;
 pub mod data;
 pub mod error;
+pub mod export;
 pub mod inference;
 pub mod model;
 pub mod plot;
