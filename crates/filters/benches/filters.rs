@@ -4,6 +4,9 @@
 //! `RAYON_NUM_THREADS=1 cargo bench -p normalnet-filters` and `=2`.
 //! Skips (prints a message) when the shared data is absent.
 
+// criterion_group! generates an undocumented function.
+#![allow(missing_docs)]
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use normalnet_filters::{L0Params, Method};
 use normalnet_mesh::{Mesh, NoProgress, read_mesh};

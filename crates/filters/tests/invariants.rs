@@ -167,7 +167,8 @@ fn run_all(mesh: &Mesh) -> Vec<(String, Mesh)> {
 fn results_are_equivariant_under_similarity_transforms() {
     let mesh = noisy_sphere(12, 24, 0.03);
     let base = run_all(&mesh);
-    let cases: [(&str, Box<dyn Fn([f64; 3]) -> [f64; 3]>); 3] = [
+    type Map = Box<dyn Fn([f64; 3]) -> [f64; 3]>;
+    let cases: [(&str, Map); 3] = [
         ("translation", Box::new(|p| vec3::add(p, [3.0, -2.0, 7.5]))),
         ("rotation", Box::new(rotate)),
         ("scaling", Box::new(|p| vec3::scale(p, 3.7))),
