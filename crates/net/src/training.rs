@@ -43,7 +43,7 @@ use crate::bundle::{
     INTERVALS, MANIFEST, Manifest, NetworkInfo, load_network, new_manifest, save_network,
     write_atomically,
 };
-use crate::data::{SampleBatch, grids_tensor, tensor_to_vec};
+use crate::data::SampleBatch;
 use crate::inference::filtered_normals;
 use crate::model::{MU_GS, ModelConfig, NUM_OUTPUTS, NormalNet};
 use crate::step::{adam, train_step};
@@ -113,6 +113,8 @@ pub struct TrainConfig {
     pub shape_faces: usize,
     /// network inference batch during regeneration
     pub inference_batch: usize,
+    /// train only the first this many networks (experiments; 6 = a bundle)
+    pub stop_after: usize,
 }
 
 impl Default for TrainConfig {
@@ -136,6 +138,7 @@ impl Default for TrainConfig {
             validation: Vec::new(),
             shape_faces: 2000,
             inference_batch: 128,
+            stop_after: 6,
         }
     }
 }
@@ -378,7 +381,7 @@ pub fn train(
         }
     }
     let mut total_pool = 0;
-    for k in run.finished..INTERVALS.len() {
+    for k in run.finished..INTERVALS.len().min(config.stop_after) {
         let net_start = Instant::now();
         progress.message(&format!("network {}: building samples", k + 1));
         let sources: Vec<SampleSource> = pairs
@@ -530,7 +533,7 @@ pub fn train(
         networks.push(best);
         run.networks.truncate(k);
         run.networks.push(info);
-        if k + 1 < INTERVALS.len() {
+        if k + 1 < INTERVALS.len().min(config.stop_after) {
             let passes = INTERVALS[k + 1].0 - INTERVALS[k].0;
             progress.message(&format!("regenerating meshes with network {}", k + 1));
             regenerate(
@@ -566,6 +569,16 @@ pub fn train(
         save_state(out, &run)?;
         let _ = std::fs::remove_file(&ckpt_model);
         let _ = std::fs::remove_file(&ckpt_optim);
+    }
+    if run.finished < INTERVALS.len() {
+        crate::plot::loss_curve_png(&log_path, &out.join("loss.png"))?;
+        return Err(NetError::BadConfig {
+            path: out.join("config.toml"),
+            message: format!(
+                "stop_after = {}: trained {} of 6 networks, no bundle written",
+                config.stop_after, run.finished
+            ),
+        });
     }
     // the manifest
     let mut manifest = new_manifest(&config.preset)?;
@@ -710,35 +723,30 @@ fn validation_set(
     })
 }
 
-/// Mean angle (degrees) between the μ_g-0.35 output and its target.
-fn validation_error(model: &NormalNet, val: &ValidationSet, plain: &Device) -> f64 {
+/// Mean angle (degrees) between the μ_g-0.35 output and its target. Runs
+/// on the burn-free CPU engine (same outputs as burn's inference mode).
+fn validation_error(model: &NormalNet, val: &ValidationSet, _plain: &Device) -> f64 {
     if val.batch.len == 0 {
         return f64::NAN;
     }
-    let net = model.valid().fork(plain);
-    let side = val.batch.side;
-    let grid_len = val.batch.grid_len();
+    let Ok(cnn) = crate::export::compile_for_grid(&model.valid(), val.batch.side) else {
+        return f64::NAN;
+    };
+    let mut out = vec![0.0f32; val.batch.len * NUM_OUTPUTS];
+    if cnn.forward(&val.batch.grids, &mut out).is_err() {
+        return f64::NAN;
+    }
     let mut sum = 0.0;
-    for start in (0..val.batch.len).step_by(64) {
-        let end = (start + 64).min(val.batch.len);
-        let out = tensor_to_vec(net.forward(grids_tensor(
-            &val.batch.grids[start * grid_len..end * grid_len],
-            end - start,
-            side,
-            plain,
-        )));
-        for i in 0..end - start {
-            let o = &out[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
-            let t = &val.batch.targets[(start + i) * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
-            let o = [o[0] as f64, o[1] as f64, o[2] as f64];
-            let t = [t[0] as f64, t[1] as f64, t[2] as f64];
-            let a = if vec3::norm(o) == 0.0 {
-                90.0
-            } else {
-                vec3::angle(o, t).to_degrees()
-            };
-            sum += a;
-        }
+    for i in 0..val.batch.len {
+        let o = &out[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
+        let t = &val.batch.targets[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
+        let o = [o[0] as f64, o[1] as f64, o[2] as f64];
+        let t = [t[0] as f64, t[1] as f64, t[2] as f64];
+        sum += if vec3::norm(o) == 0.0 || !vec3::norm(o).is_finite() {
+            90.0
+        } else {
+            vec3::angle(o, t).to_degrees()
+        };
     }
     sum / val.batch.len as f64
 }
