@@ -96,3 +96,36 @@ impl Method {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_unknown_names_are_errors() {
+        for &name in Method::NAMES {
+            let m = Method::from_name(name).unwrap();
+            assert_eq!(m.name(), name);
+            m.validate().unwrap();
+        }
+        assert_eq!(Method::from_name("GNF").unwrap().name(), "gnf");
+        let e = Method::from_name("median").unwrap_err();
+        assert!(e.to_string().contains("median"), "{e}");
+    }
+
+    #[test]
+    fn params_deserialise_key_by_key_over_the_defaults() {
+        let m: Method = serde_json::from_str(r#"{"Gnf": {"mu_g": 0.25}}"#).unwrap();
+        assert_eq!(
+            m,
+            Method::Gnf(GnfParams {
+                mu_g: 0.25,
+                ..Default::default()
+            })
+        );
+        assert!(
+            serde_json::from_str::<Method>(r#"{"Gnf": {"mu": 0.25}}"#).is_err(),
+            "typos are errors"
+        );
+    }
+}
