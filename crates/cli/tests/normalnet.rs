@@ -1,0 +1,128 @@
+//! `normalnet denoise --method normalnet` and `normalnet train` end to end:
+//! the shipped bundle (models/lite) on a small generated noisy shape, the
+//! bundle lookup (--model, NORMALNET_MODEL) and its error messages.
+
+use normalnet_mesh::{NoiseParams, add_noise, read_mesh, write_mesh};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn normalnet() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_normalnet"));
+    c.env_remove("NORMALNET_MODEL");
+    c
+}
+
+fn noisy_shape(dir: &Path) -> PathBuf {
+    let clean = normalnet_voxel::shapes::generate_seeded(4, 300).unwrap();
+    let noisy = add_noise(
+        &clean,
+        &NoiseParams {
+            level: 0.3,
+            seed: 9,
+            ..NoiseParams::default()
+        },
+    )
+    .unwrap();
+    let path = dir.join("noisy.obj");
+    write_mesh(&path, &noisy).unwrap();
+    write_mesh(dir.join("clean.obj"), &clean).unwrap();
+    path
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn shipped_bundle_denoises_a_small_mesh() {
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lite/manifest.toml");
+    if !shipped.is_file() {
+        println!("SKIP: no shipped bundle at {}", shipped.display());
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let input = noisy_shape(dir.path());
+    let output = dir.path().join("out.obj");
+    let o = normalnet()
+        .args([
+            "denoise",
+            "-q",
+            "--json",
+            "--iterations",
+            "2",
+            "--vertex-iterations",
+            "3",
+        ])
+        .arg(&input)
+        .arg(&output)
+        .arg("--gt")
+        .arg(dir.path().join("clean.obj"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let result = read_mesh(&output).unwrap();
+    let noisy = read_mesh(&input).unwrap();
+    assert_eq!(result.faces, noisy.faces);
+    assert!(result.positions.iter().flatten().all(|x| x.is_finite()));
+    assert_ne!(result.positions, noisy.positions);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["method"], "normalnet");
+    assert!(
+        json["metrics"]["e_a_deg"]
+            .as_f64()
+            .is_some_and(f64::is_finite)
+    );
+}
+
+#[test]
+fn a_missing_bundle_is_named_in_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = noisy_shape(dir.path());
+    let output = dir.path().join("out.obj");
+    let missing = dir.path().join("no-such-bundle");
+    let o = normalnet()
+        .args(["denoise", "-q", "--model"])
+        .arg(&missing)
+        .arg(&input)
+        .arg(&output)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("no-such-bundle"), "{}", stderr(&o));
+    assert!(!output.exists());
+    // the environment variable is used when --model is absent
+    std::fs::create_dir_all(dir.path().join("empty-bundle")).unwrap();
+    let o = normalnet()
+        .env("NORMALNET_MODEL", dir.path().join("empty-bundle"))
+        .args(["denoise", "-q"])
+        .arg(&input)
+        .arg(&output)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("empty-bundle") && e.contains("manifest.toml"),
+        "{e}"
+    );
+}
+
+#[test]
+fn train_refuses_test_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("bad.toml");
+    std::fs::write(
+        &config,
+        "preset = \"tiny\"\n[[sources]]\nmesh = \"gd/Block0.4/Original.obj\"\ngaussian = [0.3]\n",
+    )
+    .unwrap();
+    let o = normalnet()
+        .args(["train", "-q", "--out"])
+        .arg(dir.path().join("out"))
+        .arg("--config")
+        .arg(&config)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("Block0.4"), "{}", stderr(&o));
+}
