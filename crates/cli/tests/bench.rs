@@ -253,3 +253,72 @@ fn render_with_gt_writes_a_png_of_the_requested_size() {
         .count();
     assert!(non_white > 320 * 200 / 10, "{non_white}");
 }
+
+#[test]
+fn merge_keeps_earlier_runs_and_their_saved_meshes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    write_pair(&data);
+    let settings = tmp.path().join("bench.toml");
+    std::fs::write(
+        &settings,
+        "[defaults.gnf]\nnormal_iterations = 3\nvertex_iterations = 3\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let bench = |methods: &str, merge: bool| {
+        let mut cmd = normalnet();
+        cmd.args(["--quiet", "bench", "--data"])
+            .arg(&data)
+            .args(["--methods", methods, "--settings"])
+            .arg(&settings)
+            .args([
+                "--render",
+                "--save-meshes",
+                "--panel-size",
+                "160x120",
+                "--out",
+            ])
+            .arg(&out);
+        if merge {
+            cmd.arg("--merge");
+        }
+        assert!(cmd.status().unwrap().success());
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap())
+                .unwrap();
+        json
+    };
+    let first = bench("gnf", false);
+    assert!(out.join("Cube0.3/gnf.obj").is_file());
+    let gnf_ea = |j: &serde_json::Value| {
+        j["records"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["method"] == "gnf")
+            .unwrap()["e_a_deg"]
+            .as_f64()
+            .unwrap()
+    };
+    let second = bench("sun07", true);
+    assert_eq!(second["methods"], serde_json::json!(["gnf", "sun07"]));
+    assert_eq!(
+        gnf_ea(&first),
+        gnf_ea(&second),
+        "the earlier gnf run is kept"
+    );
+    assert_eq!(
+        second["records"].as_array().unwrap().len(),
+        3,
+        "noisy, gnf, sun07"
+    );
+    let table = std::fs::read_to_string(out.join("table.md")).unwrap();
+    assert!(table.contains("| noisy | gnf | sun07 |"), "{table}");
+    // the picture has noisy, gnf (from the saved mesh), sun07 and the ground truth
+    let png = Image::decode_png(&std::fs::read(out.join("Cube0.3.png")).unwrap()).unwrap();
+    assert!(png.width() > 4 * 160, "{}", png.width());
+    // without --merge the earlier runs are dropped
+    let third = bench("sun07", false);
+    assert_eq!(third["methods"], serde_json::json!(["sun07"]));
+}

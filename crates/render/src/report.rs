@@ -10,7 +10,7 @@
 //! table.
 
 use crate::error::RenderError;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -18,7 +18,8 @@ use std::path::Path;
 pub const NOISY: &str = "noisy";
 
 /// One run: a method on a model, with its metrics or its error.
-#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(default)]
 pub struct RunRecord {
     /// model folder name, e.g. `Fandisk0.3`
     pub model: String,
@@ -47,7 +48,8 @@ pub struct RunRecord {
 }
 
 /// Everything the report files show.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct BenchReport {
     /// title line of table.md / index.html
     pub title: String,

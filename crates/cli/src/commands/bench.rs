@@ -80,6 +80,11 @@ pub struct Args {
     /// Also save every result mesh as OUT/MODEL/METHOD.obj.
     #[arg(long)]
     pub save_meshes: bool,
+    /// Keep the runs of an earlier OUT/results.json that this invocation does
+    /// not redo (slow methods can run separately); pictures reuse the saved
+    /// meshes of earlier runs (--save-meshes).
+    #[arg(long)]
+    pub merge: bool,
 }
 
 /// Parsed settings file.
@@ -519,6 +524,92 @@ fn model_picture(
     Ok(out)
 }
 
+/// The runs of an earlier `results.json` in `out`, for `--merge`.
+fn previous_report(out: &Path) -> anyhow::Result<Option<BenchReport>> {
+    let path = out.join("results.json");
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let report: BenchReport = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a bench results file", path.display()))?;
+    Ok(Some(report))
+}
+
+/// A finished run kept for the picture.
+struct Finished {
+    method: String,
+    mesh: Mesh,
+    e_a: f64,
+}
+
+/// The picture panels of one model: noisy, each method in column order (this
+/// run's results, or with `--merge` the saved mesh of an earlier run), ground truth.
+fn panels_for(
+    model: &str,
+    noisy: &Mesh,
+    gt: &Mesh,
+    finished: Vec<Finished>,
+    report: &BenchReport,
+    args: &Args,
+) -> Vec<Panel> {
+    let errors = |mesh: &Mesh| per_face_angle_errors(gt, mesh).ok();
+    let mut panels = Vec::new();
+    if let Some(r) = report
+        .records
+        .iter()
+        .find(|r| r.model == model && r.method == NOISY)
+        && let Some(e_a) = r.e_a_deg
+    {
+        panels.push(Panel {
+            label: format!("{NOISY}\nE_a {e_a:.2} deg"),
+            errors: errors(noisy),
+            mesh: noisy.clone(),
+            ranked_e_a: None,
+        });
+    }
+    let mut finished: Vec<Option<Finished>> = finished.into_iter().map(Some).collect();
+    for method in report.methods.iter().filter(|m| *m != NOISY) {
+        let ranked = !report.unranked.contains(method);
+        let this_run = finished
+            .iter_mut()
+            .find(|f| f.as_ref().is_some_and(|f| &f.method == method))
+            .and_then(Option::take);
+        let (mesh, e_a) = match this_run {
+            Some(f) => (f.mesh, f.e_a),
+            None => {
+                // an earlier run's result, when it was saved with --save-meshes
+                let Some(e_a) = report
+                    .records
+                    .iter()
+                    .find(|r| r.model == model && &r.method == method && r.error.is_none())
+                    .and_then(|r| r.e_a_deg)
+                else {
+                    continue;
+                };
+                match read_mesh(args.out.join(model).join(format!("{method}.obj"))) {
+                    Ok(mesh) if mesh.faces == gt.faces => (mesh, e_a),
+                    _ => continue,
+                }
+            }
+        };
+        panels.push(Panel {
+            label: format!("{method}\nE_a {e_a:.2} deg"),
+            errors: errors(&mesh),
+            mesh,
+            ranked_e_a: ranked.then_some(e_a),
+        });
+    }
+    panels.push(Panel {
+        label: "ground truth\n ".into(),
+        mesh: gt.clone(),
+        errors: None,
+        ranked_e_a: None,
+    });
+    panels
+}
+
 /// Runs `normalnet bench`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let started = Instant::now();
@@ -534,7 +625,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             .collect()
     };
     for m in &methods {
-        if base_method(m).is_none() {
+        if m == NOISY || base_method(m).is_none() {
             bail!(
                 "unknown method `{m}` (known: {NORMALNET}, {ORACLE}, {}, or a variant METHOD-NAME with its own settings)",
                 Method::NAMES.join(", ")
@@ -563,17 +654,35 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
 
-    let mut report = BenchReport {
-        title: "normalnet bench: E_a and E_v on noisy/clean pairs".into(),
-        models: models.clone(),
-        methods: methods.clone(),
-        unranked: methods
-            .iter()
-            .filter(|m| base_method(m).as_deref() == Some(ORACLE))
-            .cloned()
-            .collect(),
-        ..Default::default()
+    let previous = if args.merge {
+        previous_report(&args.out)?
+    } else {
+        None
     };
+    let merged = previous.is_some();
+    let mut report = previous.unwrap_or_default();
+    report.title = "normalnet bench: E_a and E_v on noisy/clean pairs".into();
+    for m in &models {
+        if !report.models.contains(m) {
+            report.models.push(m.clone());
+        }
+    }
+    for m in &methods {
+        if !report.methods.contains(m) {
+            report.methods.push(m.clone());
+        }
+    }
+    // runs redone here replace the earlier ones
+    report.records.retain(|r| {
+        !(models.contains(&r.model) && (r.method == NOISY || methods.contains(&r.method)))
+    });
+    report.unranked = report
+        .methods
+        .iter()
+        .filter(|m| base_method(m).as_deref() == Some(ORACLE))
+        .cloned()
+        .collect();
+    let old_notes = std::mem::take(&mut report.notes);
     if !report.unranked.is_empty() {
         report.notes.push(format!(
             "{}: GT-guided GNF (guidance = ground-truth normals, sigma_s = 2 d_s), NormalNet's training target \
@@ -586,6 +695,23 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     report
         .notes
         .push(format!("threads: {}", rayon::current_num_threads()));
+    if merged {
+        report.notes.push(format!(
+            "merged: runs of {} on {} are from this invocation; the others are kept from the earlier results.json",
+            methods.join(", "),
+            models.join(", ")
+        ));
+        for n in old_notes {
+            let n = n
+                .strip_prefix("earlier run: ")
+                .map(str::to_string)
+                .unwrap_or(n);
+            if !report.notes.contains(&n) && !n.starts_with("merged: ") {
+                report.notes.push(format!("earlier run: {n}"));
+            }
+        }
+    }
+
     let total_runs = models.len() * methods.len();
     let mut run_index = 0;
     for model in &models {
@@ -613,7 +739,6 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 continue;
             }
         };
-        let mut panels = Vec::new();
         match compare(&gt, &noisy) {
             Ok(m) => {
                 report.records.push(record_from(
@@ -632,15 +757,6 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                         m.e_v_over_le
                     );
                 }
-                if args.render {
-                    let errors = per_face_angle_errors(&gt, &noisy).ok();
-                    panels.push(Panel {
-                        label: format!("{NOISY}\nE_a {:.2} deg", m.e_a_deg),
-                        mesh: noisy.clone(),
-                        errors,
-                        ranked_e_a: None,
-                    });
-                }
             }
             Err(e) => {
                 let e = anyhow::Error::from(e)
@@ -650,6 +766,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                     .push(failed(model, NOISY, String::new(), &e, 0.0));
             }
         }
+        let mut finished = Vec::new();
         for method in &methods {
             run_index += 1;
             if settings.skips(model, method) {
@@ -711,15 +828,6 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                         normalnet_mesh::write_mesh(&path, &result)
                             .with_context(|| format!("saving {}", path.display()))?;
                     }
-                    if args.render {
-                        panels.push(Panel {
-                            label: format!("{method}\nE_a {:.2} deg", metrics.e_a_deg),
-                            errors: per_face_angle_errors(&gt, &result).ok(),
-                            mesh: result,
-                            ranked_e_a: (!report.unranked.contains(method))
-                                .then_some(metrics.e_a_deg),
-                        });
-                    }
                     report.records.push(record_from(
                         model,
                         method,
@@ -728,6 +836,13 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                         Some(denoise_s),
                         run_start.elapsed().as_secs_f64(),
                     ));
+                    if args.render {
+                        finished.push(Finished {
+                            method: method.clone(),
+                            mesh: result,
+                            e_a: metrics.e_a_deg,
+                        });
+                    }
                 }
                 Err(e) => {
                     if !quiet {
@@ -744,14 +859,10 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             }
         }
         if args.render {
-            panels.push(Panel {
-                label: "ground truth\n ".into(),
-                mesh: gt.clone(),
-                errors: None,
-                ranked_e_a: None,
-            });
+            let panels = panels_for(model, &noisy, &gt, finished, &report, &args);
             let view = settings.view(model).unwrap_or(args.view);
             let file = format!("{model}.png");
+            report.pictures.retain(|(m, _)| m != model);
             match model_picture(model, &panels, &gt, &args, view)
                 .and_then(|img| img.write_png(args.out.join(&file)).map_err(Into::into))
             {
