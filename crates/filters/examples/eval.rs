@@ -44,16 +44,33 @@ fn main() {
     // Optional parameter overrides as JSON: eval bnf '{"include_centre":false}' Model...
     let oracle = name == "oracle";
     let mut method = Method::from_name(if oracle { "gnf" } else { &name }).expect("method");
+    // The oracle defaults to MEASURED.md's Fandisk settings.
+    let mut oracle_params = GtGuidedGnfParams {
+        mu_g: 0.25,
+        iterations: 10,
+        vertex_iterations: 20,
+        ..Default::default()
+    };
     if models.first().is_some_and(|m| m.starts_with('{')) {
         let patch: serde_json::Value =
             serde_json::from_str(&models.remove(0)).expect("JSON overrides");
+        let mut o = serde_json::to_value(&oracle_params).unwrap();
+        for (k, x) in patch.as_object().unwrap() {
+            o[k] = x.clone();
+        }
+        if oracle {
+            oracle_params = serde_json::from_value(o).expect("oracle parameters");
+            println!("{}", serde_json::to_string(&oracle_params).unwrap());
+        }
         let mut v = serde_json::to_value(&method).unwrap();
         let params = v.as_object_mut().unwrap().values_mut().next().unwrap();
         for (k, x) in patch.as_object().unwrap() {
             params[k] = x.clone();
         }
-        method = serde_json::from_value(v).expect("overridden parameters");
-        println!("{}", serde_json::to_string(&method).unwrap());
+        if !oracle {
+            method = serde_json::from_value(v).expect("overridden parameters");
+            println!("{}", serde_json::to_string(&method).unwrap());
+        }
     }
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/gd");
     for model in models {
@@ -62,13 +79,7 @@ fn main() {
         let t0 = Instant::now();
         let out = if oracle {
             let gt = face_normals(&clean);
-            let p = GtGuidedGnfParams {
-                mu_g: 0.25,
-                iterations: 10,
-                vertex_iterations: 20,
-                ..Default::default()
-            };
-            gt_guided_gnf(&noisy, &gt, &p, &NoProgress).expect("oracle")
+            gt_guided_gnf(&noisy, &gt, &oracle_params, &NoProgress).expect("oracle")
         } else {
             method.denoise(&noisy, &NoProgress).expect("denoise")
         };
