@@ -237,13 +237,20 @@ impl Cnn {
                 expected: grids.len() / g * no,
             });
         }
+        // One contiguous run of samples per thread, so each thread allocates
+        // its buffers once per call (rayon's `for_each_init` would do it per
+        // split job).
+        let samples = grids.len() / g;
+        let per_thread = samples.div_ceil(rayon::current_num_threads()).max(1);
         grids
-            .par_chunks(g)
-            .zip(out.par_chunks_mut(no))
-            .for_each_init(
-                || self.scratch(),
-                |s, (grid, o)| self.forward_one(grid, s, o),
-            );
+            .par_chunks(per_thread * g)
+            .zip(out.par_chunks_mut(per_thread * no))
+            .for_each(|(grids, out)| {
+                let mut s = self.scratch();
+                for (grid, o) in grids.chunks_exact(g).zip(out.chunks_exact_mut(no)) {
+                    self.forward_one(grid, &mut s, o);
+                }
+            });
         Ok(())
     }
 
