@@ -1,7 +1,7 @@
 //! Classical mesh denoisers on one normal-filter + vertex-update skeleton
 //! (SPEC §4, §9): GNF (Zhang et al. 2015), its ground-truth-guided variant
 //! (NormalNet's training targets, SPEC §8), and the baselines of the paper's
-//! comparison.
+//! comparison (BNF, Sun07, L0, BI, VT).
 //!
 //! Input comes from `normalnet_mesh` (`Mesh`, `Topology`, `FaceGeometry`);
 //! results go to the CLI (`normalnet denoise`, `normalnet bench`), and
@@ -11,6 +11,7 @@
 //! Every method has a params struct whose `Default` is the reference
 //! defaults, and [`Method`] names them for the CLI and the benchmark.
 
+pub mod bi;
 pub mod bilateral;
 pub mod driver;
 pub mod error;
@@ -20,7 +21,9 @@ pub mod l0;
 pub mod stats;
 pub mod sun07;
 pub mod vertex_update;
+pub mod vt;
 
+pub use bi::{Bi, BiParams, bi};
 pub use bilateral::{Bnf, BnfParams, bnf};
 pub use driver::{NormalFilter, Passes, Schedule, run_filter};
 pub use error::FilterError;
@@ -33,6 +36,7 @@ pub use sun07::{Sun07, Sun07Params, sun07};
 pub use vertex_update::{
     VertexUpdateBuffers, vertex_update, vertex_update_in_place, vertex_update_in_place_fixed,
 };
+pub use vt::{Vt, VtParams, binary_vote, symmetric_eigen, vt};
 
 use normalnet_mesh::{Mesh, Progress};
 
@@ -48,11 +52,15 @@ pub enum Method {
     Sun07(Sun07Params),
     /// L0 minimisation, edge-based with area regulariser (He & Schaefer 2013).
     L0(L0Params),
+    /// Bi-normal filtering (Wei et al. 2015), core scheme (see [`bi`]).
+    Bi(BiParams),
+    /// Normal voting tensor with binary optimisation (Yadav et al. 2018).
+    Vt(VtParams),
 }
 
 impl Method {
     /// Names accepted by [`Method::from_name`], in display order.
-    pub const NAMES: &'static [&'static str] = &["gnf", "bnf", "sun07", "l0"];
+    pub const NAMES: &'static [&'static str] = &["gnf", "bnf", "sun07", "l0", "bi", "vt"];
 
     /// The method called `name` (case-insensitive) with its default
     /// parameters.
@@ -62,6 +70,8 @@ impl Method {
             "bnf" => Ok(Method::Bnf(BnfParams::default())),
             "sun07" => Ok(Method::Sun07(Sun07Params::default())),
             "l0" => Ok(Method::L0(L0Params::default())),
+            "bi" => Ok(Method::Bi(BiParams::default())),
+            "vt" => Ok(Method::Vt(VtParams::default())),
             _ => Err(FilterError::UnknownMethod(name.to_string())),
         }
     }
@@ -73,6 +83,8 @@ impl Method {
             Method::Bnf(_) => "bnf",
             Method::Sun07(_) => "sun07",
             Method::L0(_) => "l0",
+            Method::Bi(_) => "bi",
+            Method::Vt(_) => "vt",
         }
     }
 
@@ -83,6 +95,8 @@ impl Method {
             Method::Bnf(p) => p.validate(),
             Method::Sun07(p) => p.validate(),
             Method::L0(p) => p.validate(),
+            Method::Bi(p) => p.validate(),
+            Method::Vt(p) => p.validate(),
         }
     }
 
@@ -93,6 +107,8 @@ impl Method {
             Method::Bnf(p) => bnf(mesh, p, progress),
             Method::Sun07(p) => sun07(mesh, p, progress),
             Method::L0(p) => l0(mesh, p, progress),
+            Method::Bi(p) => bi(mesh, p, progress),
+            Method::Vt(p) => vt(mesh, p, progress),
         }
     }
 }
