@@ -56,7 +56,7 @@ fn every_classical_method_denoises_and_reports_json() {
     let noisy = sphere(16, 32, 0.02);
     write_mesh(&noisy_path, &noisy).unwrap();
     write_mesh(&clean_path, &sphere(16, 32, 0.0)).unwrap();
-    for method in ["gnf", "bnf", "sun07", "l0", "gt-gnf"] {
+    for method in ["gnf", "bnf", "sun07", "l0", "bi", "vt", "gt-gnf"] {
         let out = dir.path().join(format!("{method}.off"));
         let o = normalnet(&[
             "denoise",
@@ -121,6 +121,41 @@ fn flags_are_passed_to_the_parameters() {
 }
 
 #[test]
+fn bi_and_vt_flags_are_passed_to_the_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let noisy_path = dir.path().join("noisy.obj");
+    write_mesh(&noisy_path, &sphere(8, 16, 0.02)).unwrap();
+    let out = dir.path().join("out.obj");
+    let run = |args: &[&str]| {
+        let mut all = vec!["denoise", s(&noisy_path), s(&out), "--json"];
+        all.extend_from_slice(args);
+        let o = normalnet(&all);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["parameters"].clone()
+    };
+    let p = run(&[
+        "-m",
+        "bi",
+        "--sigma-n",
+        "0.2",
+        "--sigma-r",
+        "0.3",
+        "--iterations",
+        "2",
+    ]);
+    assert_eq!(p["sigma_n"], 0.2);
+    assert_eq!(p["sigma_r"], 0.3);
+    assert_eq!(p["normal_iterations"], 2);
+    let p = run(&[
+        "-m", "vt", "--rho", "0.8", "--tau", "0.4", "--radius", "1.5",
+    ]);
+    assert_eq!(p["rho"], 0.8);
+    assert_eq!(p["tau"], 0.4);
+    assert_eq!(p["radius_over_le"], 1.5);
+    assert_eq!(p["normal_iterations"], 5, "unset flags keep the defaults");
+}
+
+#[test]
 fn bad_flags_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let noisy_path = dir.path().join("noisy.obj");
@@ -137,6 +172,10 @@ fn bad_flags_are_clear_errors() {
     assert!(err(&["-m", "gt-gnf"]).contains("--gt"));
     assert!(err(&["-m", "gnf", "--mu-g", "-1"]).contains("mu_g"));
     assert!(err(&["-m", "l0", "--kappa", "1"]).contains("kappa"));
+    assert!(err(&["-m", "vt", "--sigma-n", "0.3"]).contains("--sigma-n does not apply"));
+    assert!(err(&["-m", "bi", "--rho", "0.3"]).contains("--rho does not apply"));
+    assert!(err(&["-m", "vt", "--tau", "0"]).contains("tau"));
+    assert!(err(&["-m", "bi", "--sigma-n", "-1"]).contains("sigma_n"));
     assert!(!out.exists(), "no output on error");
     let missing = dir.path().join("missing.obj");
     let o = normalnet(&["denoise", s(&missing), s(&out), "-m", "gnf"]);

@@ -13,7 +13,8 @@ use super::denoise_normalnet::{self, NormalnetOptions};
 use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_filters::{
-    BnfParams, GnfParams, GtGuidedGnfParams, L0Params, Method, Sun07Params, gt_guided_gnf,
+    BiParams, BnfParams, GnfParams, GtGuidedGnfParams, L0Params, Method, Sun07Params, VtParams,
+    gt_guided_gnf,
 };
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::metrics::compare;
@@ -37,26 +38,34 @@ pub enum MethodName {
     Sun07,
     /// L0 minimisation (He & Schaefer 2013)
     L0,
+    /// bi-normal filtering, core scheme (Wei et al. 2015)
+    Bi,
+    /// normal voting tensor + binary optimisation (Yadav et al. 2018)
+    Vt,
 }
 
 fn help_iterations() -> String {
     format!(
-        "Normal-filtering iterations N_f [defaults: normalnet 10, gnf {}, gt-gnf {}, bnf {}, sun07 {}]",
+        "Normal-filtering iterations N_f [defaults: normalnet 10, gnf {}, gt-gnf {}, bnf {}, sun07 {}, bi {}, vt {}]",
         GnfParams::default().normal_iterations,
         GtGuidedGnfParams::default().iterations,
         BnfParams::default().normal_iterations,
-        Sun07Params::default().normal_iterations
+        Sun07Params::default().normal_iterations,
+        BiParams::default().normal_iterations,
+        VtParams::default().normal_iterations
     )
 }
 
 fn help_vertex_iterations() -> String {
     format!(
-        "Vertex-update passes N_v (per iteration for normalnet/gnf/gt-gnf, after all normal passes for bnf/sun07) \
-         [defaults: normalnet 20, gnf {}, gt-gnf {}, bnf {}, sun07 {}]",
+        "Vertex-update passes N_v (per iteration for normalnet/gnf/gt-gnf/bi/vt, after all normal passes for bnf/sun07) \
+         [defaults: normalnet 20, gnf {}, gt-gnf {}, bnf {}, sun07 {}, bi {}, vt {}]",
         GnfParams::default().vertex_iterations,
         GtGuidedGnfParams::default().vertex_iterations,
         BnfParams::default().vertex_iterations,
-        Sun07Params::default().vertex_iterations
+        Sun07Params::default().vertex_iterations,
+        BiParams::default().vertex_iterations,
+        VtParams::default().vertex_iterations
     )
 }
 
@@ -71,24 +80,50 @@ fn help_mu_g() -> String {
 
 fn help_sigma_s() -> String {
     format!(
-        "Spatial kernel width σ_s in units of the mean centre distance d_s [defaults: gnf {}, gt-gnf {}, bnf {}]",
+        "Spatial kernel width σ_s in units of the mean centre distance d_s [defaults: gnf {}, gt-gnf {}, bnf {}, bi {}]",
         GnfParams::default().sigma_s_over_ds,
         GtGuidedGnfParams::default().sigma_s_over_ds,
-        BnfParams::default().sigma_s_over_ds
+        BnfParams::default().sigma_s_over_ds,
+        BiParams::default().sigma_s_over_ds
     )
 }
 
 fn help_radius() -> String {
     format!(
-        "GNF neighbourhood radius in units of d_s [default: {}]",
-        GnfParams::default().radius_over_ds
+        "Neighbourhood radius: gnf in units of d_s, vt (r) in units of the mean edge length l_e \
+         [defaults: gnf {}, vt {}]",
+        GnfParams::default().radius_over_ds,
+        VtParams::default().radius_over_le
     )
 }
 
 fn help_sigma_r() -> String {
     format!(
-        "BNF σ_r: range kernel width on normal differences [default: {}]",
-        BnfParams::default().sigma_r
+        "σ_r: range kernel width on normal differences (bnf) or on the vertex-normal guidance (bi) \
+         [defaults: bnf {}, bi {}]",
+        BnfParams::default().sigma_r,
+        BiParams::default().sigma_r
+    )
+}
+
+fn help_sigma_n() -> String {
+    format!(
+        "BI σ_n: width of the kernel keeping a corner's vertex normal on its side of a feature [default: {}]",
+        BiParams::default().sigma_n
+    )
+}
+
+fn help_rho() -> String {
+    format!(
+        "VT ρ: a neighbour votes only if n_i·n_j ≥ ρ [default: {}]",
+        VtParams::default().rho
+    )
+}
+
+fn help_tau() -> String {
+    format!(
+        "VT τ: binary-optimisation threshold on the normalised eigenvalues [default: {}]",
+        VtParams::default().tau
     )
 }
 
@@ -163,9 +198,18 @@ pub struct Args {
     /// GNF radius / d_s.
     #[arg(long, allow_negative_numbers = true, help = help_radius())]
     pub radius: Option<f64>,
-    /// BNF σ_r.
+    /// BNF/BI σ_r.
     #[arg(long, allow_negative_numbers = true, help = help_sigma_r())]
     pub sigma_r: Option<f64>,
+    /// BI σ_n.
+    #[arg(long, allow_negative_numbers = true, help = help_sigma_n())]
+    pub sigma_n: Option<f64>,
+    /// VT ρ.
+    #[arg(long, allow_negative_numbers = true, help = help_rho())]
+    pub rho: Option<f64>,
+    /// VT τ.
+    #[arg(long, allow_negative_numbers = true, help = help_tau())]
+    pub tau: Option<f64>,
     /// Sun07 T.
     #[arg(long, allow_negative_numbers = true, help = help_threshold())]
     pub threshold: Option<f64>,
@@ -207,13 +251,16 @@ enum Chosen {
 
 /// Rejects flags that the chosen method does not use.
 fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
-    let given: [(&str, bool); 14] = [
+    let given: [(&str, bool); 17] = [
         ("iterations", args.iterations.is_some()),
         ("vertex-iterations", args.vertex_iterations.is_some()),
         ("mu-g", args.mu_g.is_some()),
         ("sigma-s", args.sigma_s.is_some()),
         ("radius", args.radius.is_some()),
         ("sigma-r", args.sigma_r.is_some()),
+        ("sigma-n", args.sigma_n.is_some()),
+        ("rho", args.rho.is_some()),
+        ("tau", args.tau.is_some()),
         ("threshold", args.threshold.is_some()),
         ("lambda", args.lambda.is_some()),
         ("kappa", args.kappa.is_some()),
@@ -242,6 +289,8 @@ fn method_label(m: MethodName) -> &'static str {
         MethodName::Bnf => "bnf",
         MethodName::Sun07 => "sun07",
         MethodName::L0 => "l0",
+        MethodName::Bi => "bi",
+        MethodName::Vt => "vt",
     }
 }
 
@@ -336,6 +385,38 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
             set(&mut p.alpha0_over_gamma, args.alpha0);
             set(&mut p.alpha_decay, args.alpha_decay);
             Chosen::Classical(Method::L0(p))
+        }
+        MethodName::Bi => {
+            reject_unused(
+                args,
+                &[
+                    "iterations",
+                    "vertex-iterations",
+                    "sigma-s",
+                    "sigma-r",
+                    "sigma-n",
+                ],
+            )?;
+            let mut p = BiParams::default();
+            set(&mut p.normal_iterations, args.iterations);
+            set(&mut p.vertex_iterations, args.vertex_iterations);
+            set(&mut p.sigma_s_over_ds, args.sigma_s);
+            set(&mut p.sigma_r, args.sigma_r);
+            set(&mut p.sigma_n, args.sigma_n);
+            Chosen::Classical(Method::Bi(p))
+        }
+        MethodName::Vt => {
+            reject_unused(
+                args,
+                &["iterations", "vertex-iterations", "radius", "rho", "tau"],
+            )?;
+            let mut p = VtParams::default();
+            set(&mut p.normal_iterations, args.iterations);
+            set(&mut p.vertex_iterations, args.vertex_iterations);
+            set(&mut p.radius_over_le, args.radius);
+            set(&mut p.rho, args.rho);
+            set(&mut p.tau, args.tau);
+            Chosen::Classical(Method::Vt(p))
         }
     };
     if let Chosen::Classical(m) = &chosen {
