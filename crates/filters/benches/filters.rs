@@ -43,6 +43,8 @@ fn bench(c: &mut Criterion) {
                 Method::from_name("gnf").unwrap(),
                 Method::from_name("bnf").unwrap(),
                 Method::from_name("sun07").unwrap(),
+                Method::from_name("bi").unwrap(),
+                Method::from_name("vt").unwrap(),
                 l0,
             ],
         ),
@@ -52,6 +54,8 @@ fn bench(c: &mut Criterion) {
                 Method::from_name("gnf").unwrap(),
                 Method::from_name("bnf").unwrap(),
                 Method::from_name("sun07").unwrap(),
+                Method::from_name("bi").unwrap(),
+                Method::from_name("vt").unwrap(),
             ],
         ),
     ];
