@@ -34,7 +34,7 @@
 //!   differences (no global clustering step).
 //! - The paper's vertex update uses both normal fields; here the vertex
 //!   positions follow the filtered face normals only (Sun et al. 2007,
-//!   [`crate::vertex_update`]), like every other method of this crate.
+//!   [`mod@crate::vertex_update`]), like every other method of this crate.
 //! - Defaults: the paper's exact parameter values are not reproduced from
 //!   memory; σ_s = 1·d_s and σ_r = σ_n = 0.35 are the bilateral defaults of
 //!   the reference code of this comparison (GuidedDenoising, as BNF and

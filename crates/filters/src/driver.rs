@@ -1,7 +1,7 @@
 //! The normal-filter + vertex-update skeleton shared by every classical
 //! denoiser (SPEC §4, §9): a [`NormalFilter`] computes one normal-filtering
 //! pass; [`run_filter`] alternates passes with the Sun et al. (2007) vertex
-//! update of [`crate::vertex_update`].
+//! update of [`mod@crate::vertex_update`].
 //!
 //! Two schedules exist because the reference implementations differ:
 //! - [`Schedule::Interleaved`] (GNF, Zhang et al. 2015): every normal pass

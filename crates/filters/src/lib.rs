@@ -5,7 +5,7 @@
 //!
 //! Input comes from `normalnet_mesh` (`Mesh`, `Topology`, `FaceGeometry`);
 //! results go to the CLI (`normalnet denoise`, `normalnet bench`), and
-//! [`vertex_update`] / [`gt_guided::gt_guided_normals`] to the voxel and
+//! [`mod@vertex_update`] / [`gt_guided::gt_guided_normals`] to the voxel and
 //! network crates (NormalNet's inference and training targets).
 //!
 //! Every method has a params struct whose `Default` is the reference
@@ -52,7 +52,7 @@ pub enum Method {
     Sun07(Sun07Params),
     /// L0 minimisation, edge-based with area regulariser (He & Schaefer 2013).
     L0(L0Params),
-    /// Bi-normal filtering (Wei et al. 2015), core scheme (see [`bi`]).
+    /// Bi-normal filtering (Wei et al. 2015), core scheme (see [`mod@bi`]).
     Bi(BiParams),
     /// Normal voting tensor with binary optimisation (Yadav et al. 2018).
     Vt(VtParams),

@@ -30,7 +30,7 @@
 //!
 //! Deviations (documented): the paper's vertex update adds an edge-face
 //! normal term to the Sun et al. (2007) update to avoid flips; here the
-//! Sun et al. update of [`crate::vertex_update`] is used, as by every method
+//! Sun et al. update of [`mod@crate::vertex_update`] is used, as by every method
 //! of this crate. The neighbourhood is built once on the input (as GNF's)
 //! rather than every iteration. The paper's exact parameter values are not
 //! reproduced from memory; the defaults below (`r = 2·l_e`, `ρ = cos 60°`,
