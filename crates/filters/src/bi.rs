@@ -43,6 +43,7 @@
 //!   the training sources SharpSphere0.3, Nicolo0.2, Julius0.2 they give a
 //!   mean E_a of 7.2°, 10 passes 7.4°).
 
+use crate::bilateral::bilateral_normals;
 use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
 use crate::stats::mean_centre_distance;
@@ -158,24 +159,15 @@ impl NormalFilter for Bi {
                 *g = vec3::normalize_or_zero(sum);
             });
         // Step 3: face normals, bilateral with the vertex-normal guidance.
-        let guidance = &self.guidance;
-        out.par_iter_mut()
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(i, o)| {
-                let c_i = geometry.centres[i];
-                let g_i = guidance[i];
-                let mut sum = vec3::scale(normals[i], geometry.areas[i]);
-                for &j in topology.face_neighbours.row(i) {
-                    let j = j as usize;
-                    let w = geometry.areas[j]
-                        * (-vec3::dist2(c_i, geometry.centres[j]) * inv_s
-                            - vec3::dist2(g_i, guidance[j]) * inv_r)
-                            .exp();
-                    sum = vec3::add(sum, vec3::scale(normals[j], w));
-                }
-                *o = vec3::normalize_or_zero(sum);
-            });
+        bilateral_normals(
+            topology,
+            geometry,
+            normals,
+            &self.guidance,
+            [inv_s, inv_r],
+            true,
+            out,
+        );
     }
 }
 

@@ -106,29 +106,53 @@ impl NormalFilter for Bnf {
         }
         let inv_s = 1.0 / (2.0 * sigma_s * sigma_s);
         let inv_r = 1.0 / (2.0 * self.params.sigma_r * self.params.sigma_r);
-        let include_centre = self.params.include_centre;
-        out.par_iter_mut()
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(i, o)| {
-                let c_i = geometry.centres[i];
-                let n_i = normals[i];
-                let mut sum = if include_centre {
-                    vec3::scale(n_i, geometry.areas[i])
-                } else {
-                    [0.0; 3]
-                };
-                for &j in topology.face_neighbours.row(i) {
-                    let j = j as usize;
-                    let w = geometry.areas[j]
-                        * (-vec3::dist2(c_i, geometry.centres[j]) * inv_s
-                            - vec3::dist2(n_i, normals[j]) * inv_r)
-                            .exp();
-                    sum = vec3::add(sum, vec3::scale(normals[j], w));
-                }
-                *o = vec3::normalize_or_zero(sum);
-            });
+        bilateral_normals(
+            topology,
+            geometry,
+            normals,
+            normals,
+            [inv_s, inv_r],
+            self.params.include_centre,
+            out,
+        );
     }
+}
+
+/// One bilateral normal-filtering pass over the vertex-1-ring face
+/// neighbourhood: `out_i = normalize(Σ_j a_j exp(−|c_i−c_j|²·inv_s −
+/// |r_i−r_j|²·inv_r) n_j)`, the centre face included when `include_centre`.
+/// The range term compares `range` vectors: the normals themselves (BNF) or
+/// a guidance field (BI). `[inv_s, inv_r]` = `1/(2σ_s²)`, `1/(2σ_r²)`.
+pub(crate) fn bilateral_normals(
+    topology: &Topology,
+    geometry: &FaceGeometry,
+    normals: &[Vec3],
+    range: &[Vec3],
+    [inv_s, inv_r]: [f64; 2],
+    include_centre: bool,
+    out: &mut [Vec3],
+) {
+    out.par_iter_mut()
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(i, o)| {
+            let c_i = geometry.centres[i];
+            let r_i = range[i];
+            let mut sum = if include_centre {
+                vec3::scale(normals[i], geometry.areas[i])
+            } else {
+                [0.0; 3]
+            };
+            for &j in topology.face_neighbours.row(i) {
+                let j = j as usize;
+                let w = geometry.areas[j]
+                    * (-vec3::dist2(c_i, geometry.centres[j]) * inv_s
+                        - vec3::dist2(r_i, range[j]) * inv_r)
+                        .exp();
+                sum = vec3::add(sum, vec3::scale(normals[j], w));
+            }
+            *o = vec3::normalize_or_zero(sum);
+        });
 }
 
 /// Denoises `mesh` with BNF.
