@@ -193,24 +193,11 @@ pub fn bi(mesh: &Mesh, params: &BiParams, progress: &dyn Progress) -> Result<Mes
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_meshes::height_grid;
 
     /// A noise-free V-shaped grid `z = |x − k/2|` (a 90° valley along x = k/2).
     fn valley(k: usize) -> Mesh {
-        let mut p = Vec::new();
-        for y in 0..=k {
-            for x in 0..=k {
-                p.push([x as f64, y as f64, (x as f64 - k as f64 / 2.0).abs()]);
-            }
-        }
-        let id = |x: usize, y: usize| (y * (k + 1) + x) as u32;
-        let mut f = Vec::new();
-        for y in 0..k {
-            for x in 0..k {
-                f.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-                f.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-            }
-        }
-        Mesh::new(p, f).unwrap()
+        height_grid(k, |x, _| (x as f64 - k as f64 / 2.0).abs())
     }
 
     #[test]

@@ -326,24 +326,11 @@ pub fn gnf(mesh: &Mesh, params: &GnfParams, progress: &dyn Progress) -> Result<M
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_meshes::height_grid;
 
     /// Flat `k × k` grid of squares split into triangles, in the z = 0 plane.
     pub(crate) fn grid(k: usize) -> Mesh {
-        let mut p = Vec::new();
-        for y in 0..=k {
-            for x in 0..=k {
-                p.push([x as f64, y as f64, 0.0]);
-            }
-        }
-        let id = |x: usize, y: usize| (y * (k + 1) + x) as u32;
-        let mut f = Vec::new();
-        for y in 0..k {
-            for x in 0..k {
-                f.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-                f.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-            }
-        }
-        Mesh::new(p, f).unwrap()
+        height_grid(k, |_, _| 0.0)
     }
 
     #[test]

@@ -251,25 +251,12 @@ pub fn gt_guided_gnf(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_meshes::height_grid;
     use normalnet_mesh::geometry::face_normals;
 
+    /// A `k × k` grid with small deterministic bumps.
     fn bumpy_grid(k: usize) -> Mesh {
-        let mut p = Vec::new();
-        for y in 0..=k {
-            for x in 0..=k {
-                let z = 0.05 * (((x * 7 + y * 13) % 5) as f64 - 2.0);
-                p.push([x as f64, y as f64, z]);
-            }
-        }
-        let id = |x: usize, y: usize| (y * (k + 1) + x) as u32;
-        let mut f = Vec::new();
-        for y in 0..k {
-            for x in 0..k {
-                f.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-                f.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-            }
-        }
-        Mesh::new(p, f).unwrap()
+        height_grid(k, |x, y| 0.05 * (((x * 7 + y * 13) % 5) as f64 - 2.0))
     }
 
     #[test]
