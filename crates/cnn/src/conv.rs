@@ -58,6 +58,16 @@ impl MulAdd for Plain {
     }
 }
 
+/// Which output cubes to compute: the others are copied from `background`
+/// (when given) or left as they are.
+#[derive(Clone, Copy)]
+pub(crate) struct Region<'a> {
+    /// one flag per output cube: compute it
+    pub mask: &'a [bool],
+    /// `[m, m, m, cout]`: the value of every cube not computed
+    pub background: Option<&'a [f32]>,
+}
+
 /// Channel counts the kernels are compiled for.
 pub(crate) const SUPPORTED_CHANNELS: [usize; 6] = [8, 16, 32, 64, 128, 256];
 
@@ -121,6 +131,7 @@ impl FoldedConv {
         out: &mut [f32],
         accumulate: bool,
         relu: bool,
+        region: Option<Region>,
     ) {
         let m = self.output_side(n);
         debug_assert_eq!(input.len(), n * n * n * self.cin);
@@ -133,14 +144,14 @@ impl FoldedConv {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: `Level::detect` found the features at run time.
                     Level::Avx512 => unsafe {
-                        dense_avx512::<$co, $s>(self, input, n, out, m, accumulate, relu)
+                        dense_avx512::<$co, $s>(self, input, n, out, m, accumulate, relu, region)
                     },
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: as above.
                     Level::Avx2 => unsafe {
-                        dense_avx2::<$co, $s>(self, input, n, out, m, accumulate, relu)
+                        dense_avx2::<$co, $s>(self, input, n, out, m, accumulate, relu, region)
                     },
-                    _ => dense::<$co, $s, Plain>(self, input, n, out, m, accumulate, relu),
+                    _ => dense::<$co, $s, Plain>(self, input, n, out, m, accumulate, relu, region),
                 }
             };
         }
@@ -156,6 +167,31 @@ impl FoldedConv {
     }
 }
 
+impl FoldedConv {
+    /// Output cubes whose input window holds a flagged input cube: `mask_in`
+    /// over the `n³` input, result over the `m³` output.
+    pub(crate) fn window_mask(&self, mask_in: &[bool], n: usize, out: &mut Vec<bool>) {
+        let (k, s, p) = (self.k, self.stride, self.pad);
+        let m = self.output_side(n);
+        out.clear();
+        out.resize(m * m * m, false);
+        for od in 0..m {
+            for oh in 0..m {
+                for ow in 0..m {
+                    out[(od * m + oh) * m + ow] = taps(od, s, p, k, n).any(|kd| {
+                        taps(oh, s, p, k, n).any(|kh| {
+                            taps(ow, s, p, k, n).any(|kw| {
+                                mask_in[((od * s + kd - p) * n + oh * s + kh - p) * n + ow * s + kw
+                                    - p]
+                            })
+                        })
+                    });
+                }
+            }
+        }
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx2,fma")]
 fn dense_avx512<const CO: usize, const S: usize>(
@@ -166,8 +202,9 @@ fn dense_avx512<const CO: usize, const S: usize>(
     m: usize,
     acc: bool,
     relu: bool,
+    region: Option<Region>,
 ) {
-    dense::<CO, S, Fused>(c, input, n, out, m, acc, relu)
+    dense::<CO, S, Fused>(c, input, n, out, m, acc, relu, region)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -180,8 +217,9 @@ fn dense_avx2<const CO: usize, const S: usize>(
     m: usize,
     acc: bool,
     relu: bool,
+    region: Option<Region>,
 ) {
-    dense::<CO, S, Fused>(c, input, n, out, m, acc, relu)
+    dense::<CO, S, Fused>(c, input, n, out, m, acc, relu, region)
 }
 
 /// Valid kernel offsets along one axis for output coordinate `o`:
@@ -203,6 +241,7 @@ fn dense<const CO: usize, const S: usize, F: MulAdd>(
     m: usize,
     accumulate: bool,
     relu: bool,
+    region: Option<Region>,
 ) {
     let (cin, k, s, p) = (c.cin, c.k, c.stride, c.pad);
     let bias: [f32; CO] = c.b[..CO].try_into().expect("bias length");
@@ -215,6 +254,14 @@ fn dense<const CO: usize, const S: usize, F: MulAdd>(
                 let o = (od * m + oh) * m + ow;
                 let dst: &mut [f32; CO] =
                     (&mut out[o * CO..o * CO + CO]).try_into().expect("out row");
+                if let Some(r) = region
+                    && !r.mask[o]
+                {
+                    if let Some(bg) = r.background {
+                        dst.copy_from_slice(&bg[o * CO..o * CO + CO]);
+                    }
+                    continue;
+                }
                 let mut accs = [[0.0f32; CO]; S];
                 for kd in rd.clone() {
                     let id = od * s + kd - p;

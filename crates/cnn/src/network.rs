@@ -1,6 +1,6 @@
 //! `Cnn`: a compiled network — folded layers, forward pass over a batch.
 
-use crate::conv::{FoldedConv, Level, SUPPORTED_CHANNELS};
+use crate::conv::{FoldedConv, Level, Region, SUPPORTED_CHANNELS};
 use crate::error::CnnError;
 use crate::sparse_conv::Occupied;
 use crate::weights::{BatchNormWeights, LinearWeights, NetWeights};
@@ -66,6 +66,18 @@ pub struct Cnn {
     output: FoldedLinear,
     level: Level,
     largest: usize,
+    background: Background,
+}
+
+/// Activations of an all-empty grid: every cube whose receptive field holds
+/// no occupied voxel has exactly these values, so only the cubes near the
+/// surface sheet are computed (the others are copied).
+#[derive(Clone, Debug, Default)]
+struct Background {
+    /// per block, the output of `conv_a` (after BN + ReLU)
+    a: Vec<Vec<f32>>,
+    /// per block, the block output
+    y: Vec<Vec<f32>>,
 }
 
 /// Per-thread buffers of one forward pass.
@@ -76,6 +88,11 @@ struct Scratch {
     y: Vec<f32>,
     v: Vec<f32>,
     w: Vec<f32>,
+    /// cubes of the current activation whose receptive field is occupied
+    near: Vec<bool>,
+    near_a: Vec<bool>,
+    near_s: Vec<bool>,
+    near_y: Vec<bool>,
 }
 
 impl Cnn {
@@ -187,7 +204,7 @@ impl Cnn {
             ));
         }
         let output = FoldedLinear::new(&weights.output, None);
-        Ok(Cnn {
+        let mut cnn = Cnn {
             grid: weights.grid,
             stem,
             stem_side,
@@ -196,7 +213,19 @@ impl Cnn {
             output,
             level: Level::detect(),
             largest,
-        })
+            background: Background::default(),
+        };
+        let mut s = cnn.scratch();
+        let mut out = vec![0.0; cnn.outputs()];
+        let mut background = Background::default();
+        cnn.run(
+            &vec![0.0; cnn.grid_len()],
+            &mut s,
+            &mut out,
+            Some(&mut background),
+        );
+        cnn.background = background;
+        Ok(cnn)
     }
 
     /// Length of one input grid, `3 · D · H · W`.
@@ -248,7 +277,7 @@ impl Cnn {
             .for_each(|(grids, out)| {
                 let mut s = self.scratch();
                 for (grid, o) in grids.chunks_exact(g).zip(out.chunks_exact_mut(no)) {
-                    self.forward_one(grid, &mut s, o);
+                    self.run(grid, &mut s, o, None);
                 }
             });
         Ok(())
@@ -262,24 +291,77 @@ impl Cnn {
             y: vec![0.0; self.largest],
             v: vec![0.0; self.largest],
             w: vec![0.0; self.largest],
+            near: Vec::new(),
+            near_a: Vec::new(),
+            near_s: Vec::new(),
+            near_y: Vec::new(),
         }
     }
 
-    fn forward_one(&self, grid: &[f32], s: &mut Scratch, out: &mut [f32]) {
+    /// One sample. With `record`, computes every cube and records the
+    /// activations (the background); otherwise computes only the cubes near
+    /// the occupied voxels and copies the background elsewhere.
+    fn run(
+        &self,
+        grid: &[f32],
+        s: &mut Scratch,
+        out: &mut [f32],
+        mut record: Option<&mut Background>,
+    ) {
         let lv = self.level;
+        let sparse = record.is_none();
         s.occupied.gather(grid, 3);
         let mut n = self.stem_side;
         let mut c = self.stem.cout;
         self.stem
             .run_sparse(lv, &s.occupied, self.grid, &mut s.x[..n * n * n * c]);
-        for b in &self.blocks {
+        if sparse {
+            self.stem.reach_mask(&s.occupied, self.grid, &mut s.near);
+        }
+        for (bi, b) in self.blocks.iter().enumerate() {
             let (m, co) = (b.m, b.a.cout);
             let x = &s.x[..n * n * n * c];
             let y = &mut s.y[..m * m * m * co];
-            b.shortcut.run(lv, x, n, y, false, false);
             let t = &mut s.t[..m * m * m * co];
-            b.a.run(lv, x, n, t, false, true);
-            b.b.run(lv, t, m, y, true, true);
+            if sparse {
+                b.a.window_mask(&s.near, n, &mut s.near_a);
+                b.shortcut.window_mask(&s.near, n, &mut s.near_s);
+                b.b.window_mask(&s.near_a, m, &mut s.near_y);
+                for (y, &s) in s.near_y.iter_mut().zip(&s.near_s) {
+                    *y |= s;
+                }
+                let (near_a, near_y) = (&s.near_a, &s.near_y);
+                let only = |mask, background| Some(Region { mask, background });
+                b.shortcut
+                    .run(lv, x, n, y, false, false, only(near_y, None));
+                b.a.run(
+                    lv,
+                    x,
+                    n,
+                    t,
+                    false,
+                    true,
+                    only(near_a, Some(&self.background.a[bi])),
+                );
+                b.b.run(
+                    lv,
+                    t,
+                    m,
+                    y,
+                    true,
+                    true,
+                    only(near_y, Some(&self.background.y[bi])),
+                );
+                std::mem::swap(&mut s.near, &mut s.near_y);
+            } else {
+                b.shortcut.run(lv, x, n, y, false, false, None);
+                b.a.run(lv, x, n, t, false, true, None);
+                b.b.run(lv, t, m, y, true, true, None);
+                if let Some(r) = record.as_deref_mut() {
+                    r.a.push(t.to_vec());
+                    r.y.push(y.to_vec());
+                }
+            }
             std::mem::swap(&mut s.x, &mut s.y);
             n = m;
             c = co;

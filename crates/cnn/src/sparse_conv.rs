@@ -85,6 +85,27 @@ fn scatter_avx2<const CO: usize>(
     scatter::<CO, Fused>(c, occ, n, out, m)
 }
 
+impl FoldedConv {
+    /// Output cubes reached by an occupied input cube (len `m³`).
+    pub(crate) fn reach_mask(&self, occupied: &Occupied, n: usize, out: &mut Vec<bool>) {
+        let (k, p) = (self.k, self.pad);
+        let m = self.output_side(n);
+        out.clear();
+        out.resize(m * m * m, false);
+        for &i in &occupied.index {
+            let i = i as usize;
+            let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
+            for kd in reach(id, p, k, m) {
+                for kh in reach(ih, p, k, m) {
+                    for kw in reach(iw, p, k, m) {
+                        out[((id + p - kd) * m + ih + p - kh) * m + iw + p - kw] = true;
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Output coordinates `o = i + p − kk` inside `[0, m)`, as the kernel offsets `kk`.
 #[inline(always)]
 fn reach(i: usize, p: usize, k: usize, m: usize) -> std::ops::Range<usize> {

@@ -65,3 +65,29 @@ fn bad_shapes_are_named() {
         Err(CnnError::BufferSize { .. })
     ));
 }
+
+#[test]
+fn isolated_voxels_at_the_borders_match_reference() {
+    // Only the cubes near these voxels are computed; the rest is copied from
+    // the empty-grid activations: both must agree with the literal network.
+    let n = 15;
+    let w = common::random_net(5, n, [8, 16, 32]);
+    let cnn = Cnn::new(&w).unwrap();
+    let cubes = n * n * n;
+    let mut grid = vec![0.0f32; 3 * cubes];
+    for (d, h, wi) in [(0, 0, 0), (n - 1, 7, 3), (6, n - 1, n - 1)] {
+        let i = (d * n + h) * n + wi;
+        grid[i] = 0.3;
+        grid[cubes + i] = 0.9;
+        grid[2 * cubes + i] = -0.2;
+    }
+    let mut out = vec![0.0f32; 18];
+    cnn.forward(&grid, &mut out).unwrap();
+    let expected = common::reference_forward(&w, &grid);
+    for (k, (&got, &want)) in out.iter().zip(&expected).enumerate() {
+        assert!(
+            (got as f64 - want).abs() < 2e-4,
+            "output {k}: {got} vs {want}"
+        );
+    }
+}
