@@ -4,7 +4,9 @@
 //! fast on the CPU, with no deep-learning stack: batch norm is folded into the
 //! preceding convolution or linear layer, the first 5³ convolution scatters
 //! only the occupied voxels (a face neighbourhood is a surface sheet: a few %
-//! of the grid), and the dense 3³ convolutions run channels-last with the
+//! of the grid), later layers compute only the cubes whose receptive field
+//! reaches an occupied voxel (every other cube equals the activation of an
+//! empty grid, computed once), and the 3³ convolutions run channels-last with the
 //! output channels held in registers, compiled for AVX-512 / AVX2+FMA and
 //! chosen at run time. Samples of a batch run in parallel (rayon), each one
 //! start to finish on one thread, so results do not depend on the thread count.
