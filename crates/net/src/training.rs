@@ -84,6 +84,9 @@ pub struct TrainConfig {
     pub batch: usize,
     /// base learning rate (SPEC: 1e-4)
     pub lr: f64,
+    /// base learning rate of warm-started networks (k > 1 with
+    /// `warm_start`); 0 = `lr`
+    pub lr_warm: f64,
     /// lr multiplier per `lr_decay_steps` steps (SPEC: 0.96 per 5000)
     pub lr_decay: f64,
     /// steps per lr decay
@@ -124,6 +127,7 @@ impl Default for TrainConfig {
             seed: 1,
             batch: 80,
             lr: 1e-4,
+            lr_warm: 0.0,
             lr_decay: 0.96,
             lr_decay_steps: 5000,
             steps: [200; 6],
@@ -201,12 +205,16 @@ impl TrainConfig {
         Ok(())
     }
 
-    /// The learning rate at global step `step` of a network.
-    pub fn lr_at(&self, step: usize) -> f64 {
-        self.lr
-            * self
-                .lr_decay
-                .powf(step as f64 / self.lr_decay_steps.max(1) as f64)
+    /// The learning rate of network `k` (0-based) at its step `step`.
+    pub fn lr_at(&self, k: usize, step: usize) -> f64 {
+        let base = if k > 0 && self.warm_start && self.lr_warm > 0.0 {
+            self.lr_warm
+        } else {
+            self.lr
+        };
+        base * self
+            .lr_decay
+            .powf(step as f64 / self.lr_decay_steps.max(1) as f64)
     }
 
     fn data_dir(&self) -> PathBuf {
@@ -455,7 +463,7 @@ pub fn train(
                 &log_path,
                 k,
                 run.step,
-                config.lr_at(run.step),
+                config.lr_at(k, run.step),
                 f64::NAN,
                 e,
                 run.seconds,
@@ -468,7 +476,7 @@ pub fn train(
         let limit = config.max_seconds[k];
         let mut batch_buf = SampleBatch::with_capacity(voxel.side(), config.batch);
         for b in loader {
-            let lr = config.lr_at(run.step);
+            let lr = config.lr_at(k, run.step);
             batch_buf.len = b.len();
             batch_buf.grids = b.grids;
             batch_buf.targets = b.targets;
@@ -591,8 +599,11 @@ pub fn train(
         seed: config.seed,
         batch: config.batch,
         learning_rate: format!(
-            "{} × {}^(step/{}) per network, Adam(0.9, 0.999, 1e-8), MSE",
-            config.lr, config.lr_decay, config.lr_decay_steps
+            "{} (warm-started networks: {}) × {}^(step/{}) per network, Adam(0.9, 0.999, 1e-8), MSE",
+            config.lr,
+            if config.lr_warm > 0.0 { config.lr_warm } else { config.lr },
+            config.lr_decay,
+            config.lr_decay_steps
         ),
         regeneration: format!(
             "M_(k+1) from network k at μ_g {REGEN_MU_G}, N_v {REGEN_VERTEX_ITERATIONS}: CNN on {} (regen = true), oracle GT-guided GNF pass (μ_g 0.4, σ_s 2·d_s) on the others and on the validation meshes",

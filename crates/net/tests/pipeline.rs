@@ -57,6 +57,50 @@ fn tiny_training_writes_a_bundle_that_denoises() {
 }
 
 #[test]
+fn a_run_stopped_between_networks_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let shape = |seed: u64, regen: bool| SourceSpec {
+        mesh: format!("shape:{seed}"),
+        gaussian: vec![0.4],
+        impulsive: vec![],
+        regen,
+    };
+    let mut config = TrainConfig {
+        preset: "tiny".into(),
+        batch: 8,
+        lr: 1e-3,
+        lr_warm: 3e-4,
+        steps: [2, 2, 2, 2, 2, 2],
+        validate_every: 2,
+        validation_faces: 8,
+        shape_faces: 120,
+        workers: 1,
+        stop_after: 2,
+        sources: vec![shape(1, true), shape(2, false)],
+        validation: vec![shape(1001, false)],
+        ..TrainConfig::default()
+    };
+    // the first two networks only: no bundle yet
+    assert!(train(&config, dir.path(), false, &NoProgress).is_err());
+    assert!(dir.path().join("net2.bpk").is_file());
+    assert!(!dir.path().join("manifest.toml").exists());
+    let net1 = std::fs::read(dir.path().join("net1.bpk")).unwrap();
+    config.stop_after = 6;
+    let manifest = train(&config, dir.path(), true, &NoProgress).unwrap();
+    assert_eq!(manifest.networks.len(), 6);
+    assert_eq!(manifest.networks[0].steps, 2);
+    // finished networks are kept as they were
+    assert_eq!(std::fs::read(dir.path().join("net1.bpk")).unwrap(), net1);
+    let log = std::fs::read_to_string(dir.path().join("train_log.csv")).unwrap();
+    assert!(log.lines().any(|l| l.starts_with("6,")));
+    assert!(log.lines().any(|l| l.starts_with("1,")));
+    assert!(
+        log.contains("3.000e-4"),
+        "warm-started networks use lr_warm"
+    );
+}
+
+#[test]
 fn test_models_are_refused_as_training_sources() {
     let config = TrainConfig {
         sources: vec![SourceSpec {
