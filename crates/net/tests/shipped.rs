@@ -1,0 +1,84 @@
+//! The shipped bundle (`models/lite`) on a generated noisy shape: one
+//! filtering pass of network 1 is (approximately) rotation-equivariant.
+//! The voxel frame aligns each face's 2-ring mean normal with y, so a rotated
+//! mesh gives the same grids up to a rotation about y (the free yaw); a
+//! network trained with random yaw augmentation should then answer with the
+//! rotated normals. Exactness modulo yaw is tested in `inference.rs`; this
+//! measures how yaw-invariant the trained network actually is.
+
+use normalnet_mesh::vec3::{self, Vec3};
+use normalnet_mesh::{NoProgress, NoiseParams, Topology, add_noise};
+use normalnet_net::inference::filtered_normals;
+use normalnet_net::{Bundle, cpu_device};
+use normalnet_voxel::frame::{Mat3, mat_vec};
+use std::path::Path;
+
+fn rotation(axis: Vec3, angle: f64) -> Mat3 {
+    let [x, y, z] = vec3::normalize_or_zero(axis);
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+}
+
+#[test]
+fn trained_network_is_nearly_rotation_equivariant() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lite");
+    if !path.join("manifest.toml").is_file() {
+        println!("SKIP: no shipped bundle at {}", path.display());
+        return;
+    }
+    let bundle = Bundle::load(&path, &cpu_device()).unwrap();
+    let clean = normalnet_voxel::shapes::generate_seeded(21, 600).unwrap();
+    let noisy = add_noise(
+        &clean,
+        &NoiseParams {
+            level: 0.3,
+            seed: 5,
+            ..NoiseParams::default()
+        },
+    )
+    .unwrap();
+    let r = rotation([0.2, 0.9, -0.4], 2.0);
+    let rotated = noisy.with_positions(noisy.positions.iter().map(|p| mat_vec(&r, *p)).collect());
+    let topology = Topology::new(noisy.num_vertices(), &noisy.faces);
+    let run = |m| {
+        filtered_normals(
+            m,
+            &topology,
+            &bundle.networks[0],
+            bundle.voxel_params(),
+            bundle.output_for_mu_g(0.35),
+            128,
+            &bundle.device,
+            None,
+            &NoProgress,
+        )
+        .unwrap()
+        .0
+    };
+    let a = run(&noisy);
+    let b = run(&rotated);
+    let dev: Vec<f64> = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| vec3::angle(mat_vec(&r, *x), *y).to_degrees())
+        .collect();
+    let mean = dev.iter().sum::<f64>() / dev.len() as f64;
+    // how much the pass changes the normals, for scale
+    let noisy_normals = normalnet_mesh::geometry::face_normals(&noisy);
+    let moved: f64 = a
+        .iter()
+        .zip(&noisy_normals)
+        .map(|(x, y)| vec3::angle(*x, *y).to_degrees())
+        .sum::<f64>()
+        / a.len() as f64;
+    println!("mean deviation from equivariance {mean:.2}°, mean change of the pass {moved:.2}°");
+    assert!(
+        mean < 0.3 * moved,
+        "rotating the mesh changes the outputs by {mean:.2}° on average (the pass itself moves normals by {moved:.2}°)"
+    );
+}
