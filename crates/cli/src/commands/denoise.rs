@@ -450,9 +450,11 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     };
     let progress = Bar::new(quiet);
     let t_denoise = Instant::now();
+    let mut stages = None;
     let (result, parameters) = match &chosen {
         Chosen::Normalnet(options) => {
-            let out = denoise_normalnet::denoise(&mesh, options, &progress)?;
+            let (out, times) = denoise_normalnet::denoise_with_stages(&mesh, options, &progress)?;
+            stages = Some(times);
             let parameters = json!({
                 "model": options.model,
                 "iterations": options.iterations,
@@ -500,6 +502,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             "denoise_seconds": denoise_seconds,
             "total_seconds": total_seconds,
             "threads": rayon::current_num_threads(),
+            "stages": stages,
             "gt": args.gt,
             "metrics": metrics,
         });
