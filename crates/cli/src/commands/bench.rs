@@ -672,10 +672,6 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             report.methods.push(m.clone());
         }
     }
-    // runs redone here replace the earlier ones
-    report.records.retain(|r| {
-        !(models.contains(&r.model) && (r.method == NOISY || methods.contains(&r.method)))
-    });
     report.unranked = report
         .methods
         .iter()
@@ -715,6 +711,11 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let total_runs = models.len() * methods.len();
     let mut run_index = 0;
     for model in &models {
+        // runs redone here replace the earlier ones (model by model, so a
+        // stopped bench keeps the earlier runs of the models it did not reach)
+        report
+            .records
+            .retain(|r| !(&r.model == model && (r.method == NOISY || methods.contains(&r.method))));
         let dir = args.data.join(model);
         let load_start = Instant::now();
         let loaded = (|| -> anyhow::Result<(Mesh, Mesh)> {
