@@ -59,7 +59,10 @@ pub fn face_centres(mesh: &Mesh) -> Vec<Vec3> {
 
 /// Number of degenerate faces (zero normal).
 pub fn count_degenerate_faces(mesh: &Mesh) -> usize {
-    face_normals(mesh).iter().filter(|n| vec3::norm2(**n) == 0.0).count()
+    face_normals(mesh)
+        .iter()
+        .filter(|n| vec3::norm2(**n) == 0.0)
+        .count()
 }
 
 /// Normals, areas and centres of every face for one set of positions:
@@ -133,7 +136,9 @@ pub fn mean_edge_length(mesh: &Mesh, topology: &Topology) -> f64 {
         .par_chunks(SUM_CHUNK)
         .map(|c| {
             c.iter()
-                .map(|&[a, b]| vec3::dist2(mesh.positions[a as usize], mesh.positions[b as usize]).sqrt())
+                .map(|&[a, b]| {
+                    vec3::dist2(mesh.positions[a as usize], mesh.positions[b as usize]).sqrt()
+                })
                 .sum::<f64>()
         })
         .collect();
@@ -150,11 +155,16 @@ pub fn mean_centre_distance(topology: &Topology, centres: &[Vec3]) -> f64 {
             c.iter()
                 .filter(|[a, b]| *a != NO_FACE && *b != NO_FACE)
                 .fold((0.0, 0), |(s, n), &[a, b]| {
-                    (s + vec3::dist2(centres[a as usize], centres[b as usize]).sqrt(), n + 1)
+                    (
+                        s + vec3::dist2(centres[a as usize], centres[b as usize]).sqrt(),
+                        n + 1,
+                    )
                 })
         })
         .collect();
-    let (sum, count) = partial.iter().fold((0.0, 0usize), |x, y| (x.0 + y.0, x.1 + y.1));
+    let (sum, count) = partial
+        .iter()
+        .fold((0.0, 0usize), |x, y| (x.0 + y.0, x.1 + y.1));
     if count == 0 { 0.0 } else { sum / count as f64 }
 }
 
@@ -164,7 +174,12 @@ mod tests {
 
     fn square() -> Mesh {
         Mesh::new(
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
             vec![[0, 1, 2], [0, 2, 3]],
         )
         .unwrap()
@@ -187,7 +202,11 @@ mod tests {
 
     #[test]
     fn degenerate_face_has_zero_normal_not_nan() {
-        let m = Mesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], vec![[0, 1, 2]]).unwrap();
+        let m = Mesh::new(
+            vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
         let g = FaceGeometry::new(&m);
         assert_eq!(g.normals[0], [0.0; 3]);
         assert_eq!(g.areas[0], 0.0);

@@ -82,7 +82,11 @@ impl Mesh {
     /// # Panics
     /// If `positions.len() != self.num_vertices()`.
     pub fn with_positions(&self, positions: Vec<Vec3>) -> Mesh {
-        assert_eq!(positions.len(), self.positions.len(), "vertex count must not change");
+        assert_eq!(
+            positions.len(),
+            self.positions.len(),
+            "vertex count must not change"
+        );
         Mesh {
             positions,
             faces: self.faces.clone(),
@@ -109,11 +113,18 @@ mod tests {
 
     #[test]
     fn rejects_empty_bad_index_and_nan() {
-        assert!(matches!(Mesh::new(vec![], vec![]), Err(MeshError::Empty { .. })));
+        assert!(matches!(
+            Mesh::new(vec![], vec![]),
+            Err(MeshError::Empty { .. })
+        ));
         let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         assert!(matches!(
             Mesh::new(p.clone(), vec![[0, 1, 3]]),
-            Err(MeshError::IndexOutOfRange { face: 0, index: 3, .. })
+            Err(MeshError::IndexOutOfRange {
+                face: 0,
+                index: 3,
+                ..
+            })
         ));
         let mut q = p.clone();
         q[1][2] = f64::NAN;

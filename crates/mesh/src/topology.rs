@@ -200,7 +200,10 @@ pub fn vertex_faces(num_vertices: usize, faces: &[[u32; 3]]) -> Csr {
         }
     }
     // A face with a repeated vertex appears twice in that vertex's row.
-    let mut out = Csr { offsets: vec![0], indices: Vec::with_capacity(indices.len()) };
+    let mut out = Csr {
+        offsets: vec![0],
+        indices: Vec::with_capacity(indices.len()),
+    };
     for v in 0..num_vertices {
         let row = &indices[offsets[v] as usize..offsets[v + 1] as usize];
         let mut last = u32::MAX;

@@ -61,7 +61,10 @@ fn cube_along_its_diagonal_covers_a_hexagon() {
         let expected = 3f64.sqrt() * scale * scale;
         let got = covered(&img, bg) as f64;
         let rel = (got - expected).abs() / expected;
-        println!("{shading:?}: covered {got} px, analytic {expected:.1} px ({:.3} %)", 100.0 * rel);
+        println!(
+            "{shading:?}: covered {got} px, analytic {expected:.1} px ({:.3} %)",
+            100.0 * rel
+        );
         assert!(
             rel < 0.01,
             "{shading:?}: covered {got} px, expected {expected:.0} ({rel:.4})"
