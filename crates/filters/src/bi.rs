@@ -46,7 +46,7 @@
 use crate::bilateral::bilateral_normals;
 use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
-use crate::stats::mean_centre_distance;
+use crate::stats::spatial_sigma;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 use rayon::prelude::*;
@@ -129,12 +129,11 @@ impl NormalFilter for Bi {
         normals: &[Vec3],
         out: &mut [Vec3],
     ) {
-        let d_s = mean_centre_distance(topology, &geometry.centres);
-        let sigma_s = self.params.sigma_s_over_ds * d_s;
-        if !(sigma_s > 0.0 && sigma_s.is_finite()) {
+        let Some(sigma_s) = spatial_sigma(topology, &geometry.centres, self.params.sigma_s_over_ds)
+        else {
             out.copy_from_slice(normals);
             return;
-        }
+        };
         let inv_s = 1.0 / (2.0 * sigma_s * sigma_s);
         let inv_r = 1.0 / (2.0 * self.params.sigma_r * self.params.sigma_r);
         let inv_n = 1.0 / (2.0 * self.params.sigma_n * self.params.sigma_n);

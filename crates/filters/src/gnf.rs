@@ -29,7 +29,7 @@
 
 use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
-use crate::stats::mean_centre_distance;
+use crate::stats::{mean_centre_distance, spatial_sigma};
 use normalnet_mesh::geometry::face_centres;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Csr, FaceGeometry, Mesh, NO_FACE, Progress, Topology};
@@ -270,12 +270,11 @@ impl NormalFilter for Gnf {
         normals: &[Vec3],
         out: &mut [Vec3],
     ) {
-        let d_s = mean_centre_distance(topology, &geometry.centres);
-        let mu_d = self.params.sigma_s_over_ds * d_s;
-        if !(mu_d > 0.0 && mu_d.is_finite()) {
+        let Some(mu_d) = spatial_sigma(topology, &geometry.centres, self.params.sigma_s_over_ds)
+        else {
             out.copy_from_slice(normals);
             return;
-        }
+        };
         guidance_normals(
             topology,
             normals,
