@@ -259,6 +259,22 @@ pub fn loft(
     }
 }
 
+/// A straight prism: `profile` (about `centre`) extruded from y = 0 to y = `h`,
+/// capped at both ends.
+pub fn prism(m: &mut EditMesh, profile: &[[f64; 2]], centre: [f64; 2], h: f64) {
+    loft(
+        m,
+        &[
+            ring(profile, 1.0, centre, 0.0, 0),
+            ring(profile, 1.0, centre, h, 0),
+        ],
+        profile,
+        0,
+        None,
+        |q| q,
+    );
+}
+
 /// A ring of `profile` scaled by `s` about `(cx, cz)` at height `y`.
 pub fn ring(profile: &[[f64; 2]], s: f64, centre: [f64; 2], y: f64, band: u16) -> Ring {
     Ring {

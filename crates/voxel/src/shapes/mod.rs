@@ -259,14 +259,7 @@ fn build_part(m: &mut EditMesh, kind: ShapeKind, rng: &mut ChaCha8Rng, s: f64) {
         ShapeKind::Box => {
             let p = build::rect(rng.random_range(0.3..1.0), rng.random_range(0.3..1.0));
             let h = rng.random_range(0.3..1.0);
-            loft(
-                m,
-                &[ring(&p, 1.0, o, 0.0, 0), ring(&p, 1.0, o, h, 0)],
-                &p,
-                0,
-                None,
-                |q| q,
-            );
+            build::prism(m, &p, o, h);
         }
         ShapeKind::Cylinder => {
             let r = rng.random_range(0.2..0.5);
@@ -326,14 +319,7 @@ fn build_part(m: &mut EditMesh, kind: ShapeKind, rng: &mut ChaCha8Rng, s: f64) {
                 _ => build::cross_shape(rng.random_range(0.15..0.35)),
             };
             let h = rng.random_range(0.2..1.0);
-            loft(
-                m,
-                &[ring(&p, 1.0, o, 0.0, 0), ring(&p, 1.0, o, h, 0)],
-                &p,
-                0,
-                None,
-                |q| q,
-            );
+            build::prism(m, &p, o, h);
         }
         ShapeKind::Chamfered => {
             let (w, d) = (rng.random_range(0.4..1.0), rng.random_range(0.4..1.0));
@@ -393,14 +379,7 @@ fn build_part(m: &mut EditMesh, kind: ShapeKind, rng: &mut ChaCha8Rng, s: f64) {
                 .collect();
             let p = build::notched_rect(w, d, &notches);
             let h = rng.random_range(0.2..0.6);
-            loft(
-                m,
-                &[ring(&p, 1.0, o, 0.0, 0), ring(&p, 1.0, o, h, 0)],
-                &p,
-                0,
-                None,
-                |q| q,
-            );
+            build::prism(m, &p, o, h);
         }
         ShapeKind::Ruled => {
             let (w, d) = (rng.random_range(0.6..1.2), rng.random_range(0.4..0.9));
