@@ -19,8 +19,10 @@ mod conv;
 mod error;
 mod network;
 mod sparse_conv;
+mod train;
 mod weights;
 
 pub use error::CnnError;
 pub use network::Cnn;
+pub use train::{AdamConfig, Loss, Trainer};
 pub use weights::{BatchNormWeights, BlockWeights, ConvWeights, LinearWeights, NetWeights};

@@ -314,7 +314,7 @@ impl Cnn {
         let mut n = self.stem_side;
         let mut c = self.stem.cout;
         self.stem
-            .run_sparse(lv, &s.occupied, self.grid, &mut s.x[..n * n * n * c]);
+            .run_sparse(lv, &s.occupied, self.grid, &mut s.x[..n * n * n * c], true);
         if sparse {
             self.stem.reach_mask(&s.occupied, self.grid, &mut s.near);
         }

@@ -30,9 +30,16 @@ impl Occupied {
 }
 
 impl FoldedConv {
-    /// `out = relu(conv(grid))` for stride 1, scattering the occupied cubes.
+    /// `out = [relu](conv(grid))` for stride 1, scattering the occupied cubes.
     /// `out`: `[m, m, m, cout]` channels-last, `m = output_side(n)`.
-    pub(crate) fn run_sparse(&self, level: Level, occupied: &Occupied, n: usize, out: &mut [f32]) {
+    pub(crate) fn run_sparse(
+        &self,
+        level: Level,
+        occupied: &Occupied,
+        n: usize,
+        out: &mut [f32],
+        relu: bool,
+    ) {
         debug_assert_eq!(self.stride, 1);
         let m = self.output_side(n);
         debug_assert_eq!(out.len(), m * m * m * self.cout);
@@ -41,11 +48,11 @@ impl FoldedConv {
                 match level {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: `Level::detect` found the features at run time.
-                    Level::Avx512 => unsafe { scatter_avx512::<$co>(self, occupied, n, out, m) },
+                    Level::Avx512 => unsafe { scatter_avx512::<$co>(self, occupied, n, out, m, relu) },
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: as above.
-                    Level::Avx2 => unsafe { scatter_avx2::<$co>(self, occupied, n, out, m) },
-                    _ => scatter::<$co, Plain>(self, occupied, n, out, m),
+                    Level::Avx2 => unsafe { scatter_avx2::<$co>(self, occupied, n, out, m, relu) },
+                    _ => scatter::<$co, Plain>(self, occupied, n, out, m, relu),
                 }
             };
         }
@@ -69,8 +76,9 @@ fn scatter_avx512<const CO: usize>(
     n: usize,
     out: &mut [f32],
     m: usize,
+    relu: bool,
 ) {
-    scatter::<CO, Fused>(c, occ, n, out, m)
+    scatter::<CO, Fused>(c, occ, n, out, m, relu)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -81,8 +89,9 @@ fn scatter_avx2<const CO: usize>(
     n: usize,
     out: &mut [f32],
     m: usize,
+    relu: bool,
 ) {
-    scatter::<CO, Fused>(c, occ, n, out, m)
+    scatter::<CO, Fused>(c, occ, n, out, m, relu)
 }
 
 impl FoldedConv {
@@ -108,7 +117,7 @@ impl FoldedConv {
 
 /// Output coordinates `o = i + p − kk` inside `[0, m)`, as the kernel offsets `kk`.
 #[inline(always)]
-fn reach(i: usize, p: usize, k: usize, m: usize) -> std::ops::Range<usize> {
+pub(crate) fn reach(i: usize, p: usize, k: usize, m: usize) -> std::ops::Range<usize> {
     // o = i + p - kk >= 0  <=>  kk <= i + p ;  o < m  <=>  kk > i + p - m
     let lo = (i + p + 1).saturating_sub(m);
     let hi = (i + p + 1).min(k);
@@ -122,6 +131,7 @@ fn scatter<const CO: usize, F: MulAdd>(
     n: usize,
     out: &mut [f32],
     m: usize,
+    relu: bool,
 ) {
     let (cin, k, p) = (c.cin, c.k, c.pad);
     let bias: [f32; CO] = c.b[..CO].try_into().expect("bias length");
@@ -158,8 +168,10 @@ fn scatter<const CO: usize, F: MulAdd>(
             }
         }
     }
-    for v in out.iter_mut() {
-        *v = v.max(0.0);
+    if relu {
+        for v in out.iter_mut() {
+            *v = v.max(0.0);
+        }
     }
 }
 

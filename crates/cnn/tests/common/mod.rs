@@ -50,7 +50,26 @@ fn linear(rng: &mut ChaCha8Rng, i: usize, o: usize) -> LinearWeights {
 
 /// A random network of the SPEC §6 shape.
 pub fn random_net(seed: u64, grid: usize, channels: [usize; 3]) -> NetWeights {
+    random_net_with(seed, grid, channels, [512, 256, 128], true)
+}
+
+/// A random network with the given hidden widths; `conv_bias: false` gives
+/// convolutions without bias (as training builds them).
+pub fn random_net_with(
+    seed: u64,
+    grid: usize,
+    channels: [usize; 3],
+    widths: [usize; 3],
+    conv_bias: bool,
+) -> NetWeights {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let conv = |rng: &mut ChaCha8Rng, cin, cout, k, s, p| {
+        let mut c = conv(rng, cin, cout, k, s, p);
+        if !conv_bias {
+            c.bias = None;
+        }
+        c
+    };
     let stem = conv(&mut rng, 3, channels[0], 5, 1, 2);
     let stem_bn = bn(&mut rng, channels[0]);
     let mut blocks = Vec::new();
@@ -67,7 +86,7 @@ pub fn random_net(seed: u64, grid: usize, channels: [usize; 3]) -> NetWeights {
         c = co;
     }
     let mut hidden = Vec::new();
-    for h in [512, 256, 128] {
+    for h in widths {
         hidden.push((linear(&mut rng, c, h), bn(&mut rng, h)));
         c = h;
     }
@@ -103,7 +122,7 @@ pub fn sheet_grid(seed: u64, n: usize) -> Vec<f32> {
     g
 }
 
-fn conv_ref(x: &[f64], c_in: usize, n: usize, w: &ConvWeights) -> (Vec<f64>, usize) {
+pub fn conv_ref(x: &[f64], c_in: usize, n: usize, w: &ConvWeights) -> (Vec<f64>, usize) {
     let (k, s, p, co) = (w.kernel, w.stride, w.padding, w.out_channels);
     let m = (n + 2 * p - k) / s + 1;
     let mut y = vec![0.0; co * m * m * m];
@@ -159,7 +178,7 @@ fn bn_ref(x: &mut [f64], bn: &BatchNormWeights) {
     }
 }
 
-fn linear_ref(x: &[f64], l: &LinearWeights) -> Vec<f64> {
+pub fn linear_ref(x: &[f64], l: &LinearWeights) -> Vec<f64> {
     (0..l.out_features)
         .map(|o| {
             l.bias.as_ref().map_or(0.0, |b| b[o] as f64)
