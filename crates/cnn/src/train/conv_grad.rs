@@ -92,7 +92,7 @@ pub(crate) fn input_grad(
     }
     match sh.cin {
         8 => go!(8, 8),
-        16 => go!(16, 8),
+        16 => go!(16, 4),
         32 => go!(32, 4),
         64 => go!(64, 2),
         128 => go!(128, 1),
@@ -167,7 +167,7 @@ fn input_grad_kernel<const CI: usize, const S: usize, F: MulAdd>(
 /// Input channels per register block of [`weight_grad`]: about sixteen
 /// vectors of accumulators, dividing `cin`.
 fn channel_block(cin: usize, cout: usize) -> usize {
-    let mut cb = (256 / cout).clamp(1, 16);
+    let mut cb = (64 / cout).clamp(1, 16);
     while cin % cb != 0 {
         cb /= 2;
     }
@@ -194,14 +194,10 @@ pub(crate) fn weight_grad(
         };
     }
     match (sh.cout, channel_block(sh.cin, sh.cout)) {
-        (8, 16) => go!(8, 16),
         (8, 8) => go!(8, 8),
-        (16, 16) => go!(16, 16),
-        (16, 8) => go!(16, 8),
-        (32, 8) => go!(32, 8),
-        (64, 4) => go!(64, 4),
-        (128, 2) => go!(128, 2),
-        (256, 1) => go!(256, 1),
+        (16, 4) => go!(16, 4),
+        (32, 2) => go!(32, 2),
+        (64, 1) => go!(64, 1),
         (8, _) => go!(8, 1),
         (16, _) => go!(16, 1),
         (32, _) => go!(32, 1),
@@ -437,6 +433,41 @@ mod tests {
                     assert_eq!(o * s + kk, i + p);
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod speed {
+    use super::*;
+    use crate::conv::FoldedConv;
+
+    #[test]
+    #[ignore]
+    fn kernel_speed() {
+        let lv = Level::detect();
+        for (n, k, s, p, ci, co) in [(11, 3, 1, 1, 16, 16), (21, 3, 2, 1, 16, 16), (11, 3, 2, 1, 16, 32), (6, 3, 1, 1, 32, 32)] {
+            let sh = ConvShape { k, stride: s, pad: p, cin: ci, cout: co };
+            let m = sh.output_side(n);
+            let x: Vec<f32> = (0..n * n * n * ci).map(|i| ((i * 7919) % 13) as f32 * 0.1 - 0.5).collect();
+            let dz: Vec<f32> = (0..m * m * m * co).map(|i| ((i * 104729) % 17) as f32 * 0.1 - 0.8).collect();
+            let w: Vec<f32> = (0..k * k * k * ci * co).map(|i| ((i * 31) % 11) as f32 * 0.01).collect();
+            let f = FoldedConv { w: w.clone(), b: vec![0.0; co], cin: ci, cout: co, k, stride: s, pad: p };
+            let mut out = vec![0.0; m * m * m * co];
+            let mut dx = vec![0.0; n * n * n * ci];
+            let mut dw = vec![0.0; w.len()];
+            let macs = (m * m * m * k * k * k * ci * co) as f64;
+            let reps = 50;
+            let t = std::time::Instant::now();
+            for _ in 0..reps { f.run(lv, &x, n, &mut out, false, false, None); }
+            let fwd = t.elapsed().as_secs_f64() / reps as f64;
+            let t = std::time::Instant::now();
+            for _ in 0..reps { input_grad(lv, &sh, &w, &dz, n, &mut dx, false); }
+            let dxt = t.elapsed().as_secs_f64() / reps as f64;
+            let t = std::time::Instant::now();
+            for _ in 0..reps { weight_grad(lv, &sh, &x, &dz, n, &mut dw); }
+            let dwt = t.elapsed().as_secs_f64() / reps as f64;
+            println!("n {n} s {s} {ci}->{co}: fwd {:.1} dx {:.1} dw {:.1} GFLOP/s", 2.0 * macs / fwd / 1e9, 2.0 * macs / dxt / 1e9, 2.0 * macs / dwt / 1e9);
         }
     }
 }

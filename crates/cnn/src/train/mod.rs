@@ -322,6 +322,36 @@ struct Cache {
     out: Vec<f32>,
 }
 
+/// Wall time per phase of a step, summed over steps (when switched on).
+#[derive(Default)]
+struct Profile {
+    on: bool,
+    last: Option<std::time::Instant>,
+    phases: Vec<(String, f64)>,
+}
+
+impl Profile {
+    fn start(&mut self) {
+        if self.on {
+            self.last = Some(std::time::Instant::now());
+        }
+    }
+
+    /// Charges the time since the last lap to `phase`.
+    fn lap(&mut self, phase: impl FnOnce() -> String) {
+        if let Some(last) = self.last {
+            let now = std::time::Instant::now();
+            let name = phase();
+            let dt = (now - last).as_secs_f64();
+            match self.phases.iter_mut().find(|(n, _)| *n == name) {
+                Some(p) => p.1 += dt,
+                None => self.phases.push((name, dt)),
+            }
+            self.last = Some(now);
+        }
+    }
+}
+
 /// A NormalNet network being trained on the CPU engine.
 pub struct Trainer {
     grid: usize,
@@ -336,6 +366,7 @@ pub struct Trainer {
     hidden: Vec<(Linear, BatchNorm)>,
     output: Linear,
     cache: Cache,
+    prof: Profile,
 }
 
 /// `y = relu(scale·z + shift)` per channel, in parallel over samples.
@@ -421,6 +452,7 @@ impl Trainer {
             hidden,
             output: Linear::new(&weights.output, "output")?,
             cache: Cache::default(),
+            prof: Profile::default(),
         })
     }
 
@@ -512,6 +544,20 @@ impl Trainer {
         v
     }
 
+    /// Switches the per-phase timing on or off (and clears it).
+    pub fn profile(&mut self, on: bool) {
+        self.prof = Profile {
+            on,
+            ..Profile::default()
+        };
+    }
+
+    /// Seconds spent per phase (layer, forward / backward) since
+    /// [`Trainer::profile`] switched timing on.
+    pub fn profile_report(&self) -> Vec<(String, f64)> {
+        self.prof.phases.clone()
+    }
+
     /// Sets every gradient to zero.
     pub fn zero_grad(&mut self) {
         for p in self.params_mut() {
@@ -521,6 +567,7 @@ impl Trainer {
 
     /// One Adam step with learning rate `lr` on the summed gradients.
     pub fn adam_step(&mut self, lr: f64) {
+        self.prof.start();
         self.t += 1;
         let (c, t) = (self.adam, self.t);
         for p in self.params_mut() {
@@ -532,6 +579,7 @@ impl Trainer {
             b.b.refresh();
             b.s.refresh();
         }
+        self.prof.lap(|| "adam".into());
     }
 
     /// `zero_grad`, forward + backward on the batch, Adam step; returns the
@@ -613,6 +661,7 @@ impl Trainer {
     }
 
     fn forward(&mut self, grids: &[f32], samples: usize, update: bool) {
+        self.prof.start();
         let lv = self.level;
         let c = &mut self.cache;
         c.samples = samples;
@@ -633,6 +682,7 @@ impl Trainer {
             .for_each(|(z, o)| stem.folded.run_sparse(lv, o, grid, z, false));
         c.st0 = self.stem_bn.stats(&c.z0, samples, update);
         bn_relu(&c.z0, &c.st0, &mut c.a0, per);
+        self.prof.lap(|| "stem forward".into());
         // blocks
         c.blocks.resize_with(self.blocks.len(), BlockCache::default);
         for (bi, b) in self.blocks.iter_mut().enumerate() {
@@ -682,6 +732,7 @@ impl Trainer {
                         }
                     }
                 });
+            self.prof.lap(|| format!("block {} forward", bi + 1));
         }
         // global max pool
         let last = c.blocks.last().map_or(&c.a0, |b| &b.out);
@@ -722,6 +773,7 @@ impl Trainer {
         for v in &mut c.out {
             *v = v.tanh();
         }
+        self.prof.lap(|| "pool + fc forward".into());
     }
 
     /// The loss of the cached outputs; with `dy`, its gradient w.r.t. the
@@ -754,6 +806,7 @@ impl Trainer {
     }
 
     fn backward(&mut self, mut dz: Vec<f32>) {
+        self.prof.start();
         let lv = self.level;
         let c = &self.cache;
         let samples = c.samples;
@@ -784,6 +837,7 @@ impl Trainer {
                     d[a[j] as usize * ch + j] = g[j];
                 }
             });
+        self.prof.lap(|| "fc + pool backward".into());
         // residual blocks, last to first
         for bi in (0..self.blocks.len()).rev() {
             let bc = &c.blocks[bi];
@@ -801,6 +855,7 @@ impl Trainer {
             b.a.backward(lv, x, b.n, &d_aa, samples, Some(&mut d_x), false);
             b.s.backward(lv, x, b.n, &d_zs, samples, Some(&mut d_x), true);
             d_out = d_x;
+            self.prof.lap(|| format!("block {} backward", bi + 1));
         }
         // stem: weight gradient scattered from the occupied cubes
         relu_mask(&mut d_out, &c.a0);
@@ -820,5 +875,6 @@ impl Trainer {
             })
             .collect();
         add_in_order(&mut self.stem.p.grad, &partial);
+        self.prof.lap(|| "stem backward".into());
     }
 }
