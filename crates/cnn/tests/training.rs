@@ -259,3 +259,19 @@ fn weights_round_trip_and_bad_batches_are_refused() {
     biased.stem.bias = Some(vec![0.0; 8]);
     assert!(Trainer::new(&biased).is_err());
 }
+
+#[test]
+fn a_saved_state_resumes_exactly() {
+    let c = case(4, 15, [8, 16, 32], 8);
+    let mut a = Trainer::new(&c.w).unwrap();
+    a.train_step(&c.grids, &c.targets, Loss::Mse, 1e-3).unwrap();
+    let state = a.state_bytes();
+    let mut b = Trainer::new(&c.w).unwrap();
+    b.load_state_bytes(&state).unwrap();
+    assert_eq!(b.steps(), 1);
+    let la = a.train_step(&c.grids, &c.targets, Loss::Mse, 1e-3).unwrap();
+    let lb = b.train_step(&c.grids, &c.targets, Loss::Mse, 1e-3).unwrap();
+    assert_eq!(la, lb);
+    assert!(a.weights() == b.weights());
+    assert!(b.load_state_bytes(&state[..state.len() - 4]).is_err());
+}

@@ -28,8 +28,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use burn::module::Module;
-use burn::optim::ModuleOptimizer;
 use burn::tensor::Device;
 use normalnet_filters::{GtGuidedGnfParams, gt_guided_gnf};
 use normalnet_mesh::geometry::face_normals;
@@ -40,13 +38,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::NetError;
 use crate::bundle::{
-    INTERVALS, MANIFEST, Manifest, NetworkInfo, load_network, new_manifest, save_network,
+    INTERVALS, MANIFEST, Manifest, NetworkInfo, load_network, new_manifest,
     write_atomically,
 };
 use crate::data::SampleBatch;
 use crate::inference::filtered_normals;
 use crate::model::{MU_GS, ModelConfig, NUM_OUTPUTS, NormalNet};
-use crate::step::{adam, train_step};
+use crate::learner::{Engine, Learner};
+use normalnet_cnn::Loss;
 
 /// Output slot of μ_g 0.35, the one validated (SPEC §8).
 const VALIDATION_SLOT: usize = 2;
@@ -118,6 +117,10 @@ pub struct TrainConfig {
     pub inference_batch: usize,
     /// train only the first this many networks (experiments; 6 = a bundle)
     pub stop_after: usize,
+    /// training engine: `cnn` (the CPU engine of normalnet-cnn) or `burn`
+    pub engine: String,
+    /// loss on the 18 outputs: `mse` (SPEC §8) or `l1` (cnn engine only)
+    pub loss: String,
 }
 
 impl Default for TrainConfig {
@@ -143,6 +146,8 @@ impl Default for TrainConfig {
             shape_faces: 2000,
             inference_batch: 128,
             stop_after: 6,
+            engine: "cnn".into(),
+            loss: "mse".into(),
         }
     }
 }
@@ -185,6 +190,12 @@ impl TrainConfig {
                 "batch, workers and validate_every must be positive".into()
             ));
         }
+        let engine = Engine::parse(&self.engine)
+            .ok_or_else(|| bad(format!("engine = {:?}: expected cnn or burn", self.engine)))?;
+        let loss = self.loss_fn().ok_or_else(|| bad(format!("loss = {:?}: expected mse or l1", self.loss)))?;
+        if engine == Engine::Burn && loss != Loss::Mse {
+            return Err(bad("the burn engine trains with loss = \"mse\" only".into()));
+        }
         if !(self.lr > 0.0 && self.lr.is_finite()) {
             return Err(bad(format!("lr = {} must be positive", self.lr)));
         }
@@ -215,6 +226,14 @@ impl TrainConfig {
         base * self
             .lr_decay
             .powf(step as f64 / self.lr_decay_steps.max(1) as f64)
+    }
+
+    fn loss_fn(&self) -> Option<Loss> {
+        match self.loss.as_str() {
+            "mse" => Some(Loss::Mse),
+            "l1" => Some(Loss::L1),
+            _ => None,
+        }
     }
 
     fn data_dir(&self) -> PathBuf {
@@ -359,7 +378,6 @@ pub fn train(
         _ => VoxelParams::lite(),
     };
     let plain = Device::flex();
-    let device = Device::flex().autodiff();
     let mut pairs = make_pairs(config, &config.sources, config.seed, progress)?;
     let mut val_pairs = make_pairs(config, &config.validation, config.seed + 777, progress)?;
     let log_path = out.join("train_log.csv");
@@ -402,43 +420,27 @@ pub fn train(
         total_pool = pool_faces;
         let val = validation_set(&val_pairs, voxel, config, k)?;
         // model: resume checkpoint, else warm start, else fresh
-        let ckpt_model = out.join("checkpoint").join("model.bpk");
-        let ckpt_optim = out.join("checkpoint").join("optim.bpk");
-        let mut optim: ModuleOptimizer = adam();
-        let resuming = resume && run.step > 0 && ckpt_model.is_file();
-        let mut model = if resuming {
-            let m = model_config
-                .init(&device, config.seed + k as u64)
-                .try_load_file(&ckpt_model)
-                .map_err(|e| NetError::Record {
-                    path: ckpt_model.clone(),
-                    message: e.to_string(),
-                })?;
-            if ckpt_optim.is_file() {
-                optim = optim.load(&ckpt_optim).map_err(|e| NetError::Record {
-                    path: ckpt_optim.clone(),
-                    message: e.to_string(),
-                })?;
-            }
-            m
+        let ckpt_dir = out.join("checkpoint");
+        let engine = Engine::parse(&config.engine).unwrap_or(Engine::Cnn);
+        let loss_fn = config.loss_fn().unwrap_or_default();
+        let start_net = if config.warm_start && k > 0 {
+            load_network(
+                &model_config,
+                &config.preset,
+                &out.join(crate::bundle::network_file(k - 1)),
+                &plain,
+            )?
         } else {
+            model_config.init(&plain, config.seed + k as u64)
+        };
+        let mut learner = Learner::new(engine, start_net, &model_config, loss_fn)?;
+        let resumed = resume && run.step > 0 && learner.restore(&ckpt_dir, &model_config)?;
+        if !resumed {
             run.step = 0;
             run.best_val = f64::INFINITY;
             run.seconds = 0.0;
             run.loss_tail.clear();
-            if config.warm_start && k > 0 {
-                model_config
-                    .init(&device, config.seed + k as u64)
-                    .try_load_file(out.join(crate::bundle::network_file(k - 1)))
-                    .map_err(|e| NetError::Record {
-                        path: out.join(crate::bundle::network_file(k - 1)),
-                        message: e.to_string(),
-                    })?
-                    .train()
-            } else {
-                model_config.init(&device, config.seed + k as u64)
-            }
-        };
+        }
         let steps = config.steps[k];
         let items = sampler.draw_count_seeded(steps * config.batch, config.seed + 10 * k as u64);
         let skip = (run.step * config.batch).min(items.len());
@@ -456,9 +458,9 @@ pub fn train(
         )?;
         let baseline = val.baseline_deg;
         if run.best_val.is_infinite() {
-            let e = validation_error(&model, &val, &plain);
+            let e = validation_error(&learner.compiled(voxel.side())?, &val);
             run.best_val = e;
-            save_network(&model, &out.join(crate::bundle::network_file(k)))?;
+            learner.save(&out.join(crate::bundle::network_file(k)))?;
             append_log(
                 &log_path,
                 k,
@@ -480,8 +482,7 @@ pub fn train(
             batch_buf.len = b.len();
             batch_buf.grids = b.grids;
             batch_buf.targets = b.targets;
-            let (m, loss) = train_step(model, &mut optim, &batch_buf, lr, &device);
-            model = m;
+            let loss = learner.step(&batch_buf, lr)?;
             run.step += 1;
             run.seconds = seconds_before + net_start.elapsed().as_secs_f64();
             run.loss_tail.push(loss);
@@ -492,10 +493,10 @@ pub fn train(
             let mut val_err = f64::NAN;
             let time_up = limit > 0.0 && run.seconds >= limit;
             if run.step % config.validate_every == 0 || run.step == steps || time_up {
-                val_err = validation_error(&model, &val, &plain);
+                val_err = validation_error(&learner.compiled(voxel.side())?, &val);
                 if val_err < run.best_val {
                     run.best_val = val_err;
-                    save_network(&model, &out.join(crate::bundle::network_file(k)))?;
+                    learner.save(&out.join(crate::bundle::network_file(k)))?;
                 }
             }
             progress.message(&format!(
@@ -511,7 +512,8 @@ pub fn train(
             ));
             append_log(&log_path, k, run.step, lr, loss, val_err, run.seconds)?;
             if last_ckpt.elapsed().as_secs_f64() >= config.checkpoint_seconds {
-                checkpoint(&model, &optim, out, &run)?;
+                learner.checkpoint(&ckpt_dir)?;
+                save_state(out, &run)?;
                 last_ckpt = Instant::now();
             }
             if time_up {
@@ -575,8 +577,7 @@ pub fn train(
         run.seconds = 0.0;
         run.loss_tail.clear();
         save_state(out, &run)?;
-        let _ = std::fs::remove_file(&ckpt_model);
-        let _ = std::fs::remove_file(&ckpt_optim);
+        Learner::clear_checkpoint(&ckpt_dir);
     }
     if run.finished < INTERVALS.len() {
         crate::plot::loss_curve_png(&log_path, &out.join("loss.png"))?;
@@ -671,31 +672,6 @@ fn save_state(out: &Path, run: &RunState) -> Result<(), NetError> {
     write_atomically(&out.join("state.toml"), text.as_bytes())
 }
 
-fn checkpoint(
-    model: &NormalNet,
-    optim: &ModuleOptimizer,
-    out: &Path,
-    run: &RunState,
-) -> Result<(), NetError> {
-    let dir = out.join("checkpoint");
-    let tmp = dir.join("model.tmp.bpk");
-    model
-        .clone()
-        .save_file(&tmp)
-        .map_err(|e| NetError::Record {
-            path: tmp.clone(),
-            message: e.to_string(),
-        })?;
-    std::fs::rename(&tmp, dir.join("model.bpk")).map_err(|e| NetError::io(&dir, e))?;
-    let tmp = dir.join("optim.tmp.bpk");
-    optim.save(&tmp).map_err(|e| NetError::Record {
-        path: tmp.clone(),
-        message: e.to_string(),
-    })?;
-    std::fs::rename(&tmp, dir.join("optim.bpk")).map_err(|e| NetError::io(&dir, e))?;
-    save_state(out, run)
-}
-
 /// Fixed validation faces of one stage: grids (yaw 0) and targets.
 struct ValidationSet {
     batch: SampleBatch,
@@ -734,15 +710,12 @@ fn validation_set(
     })
 }
 
-/// Mean angle (degrees) between the μ_g-0.35 output and its target. Runs
-/// on the burn-free CPU engine (same outputs as burn's inference mode).
-fn validation_error(model: &NormalNet, val: &ValidationSet, _plain: &Device) -> f64 {
+/// Mean angle (degrees) between the μ_g-0.35 output and its target, on the
+/// CPU inference engine (same outputs as burn's inference mode).
+fn validation_error(cnn: &normalnet_cnn::Cnn, val: &ValidationSet) -> f64 {
     if val.batch.len == 0 {
         return f64::NAN;
     }
-    let Ok(cnn) = crate::export::compile_for_grid(&model.valid(), val.batch.side) else {
-        return f64::NAN;
-    };
     let mut out = vec![0.0f32; val.batch.len * NUM_OUTPUTS];
     if cnn.forward(&val.batch.grids, &mut out).is_err() {
         return f64::NAN;

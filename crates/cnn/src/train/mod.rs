@@ -28,6 +28,9 @@ use conv_grad::ConvShape;
 pub use param::AdamConfig;
 use param::Param;
 
+/// First bytes of [`Trainer::state_bytes`].
+const STATE_MAGIC: &[u8] = b"normalnet-trainer-1\n";
+
 /// Samples per weight-gradient group (fixed, so sums do not depend on the
 /// number of threads).
 const GROUP: usize = 8;
@@ -556,6 +559,77 @@ impl Trainer {
     /// [`Trainer::profile`] switched timing on.
     pub fn profile_report(&self) -> Vec<(String, f64)> {
         self.prof.phases.clone()
+    }
+
+    fn running_mut(&mut self) -> Vec<&mut Vec<f32>> {
+        let mut v: Vec<&mut BatchNorm> = vec![&mut self.stem_bn];
+        for b in &mut self.blocks {
+            v.extend([&mut b.bn_a, &mut b.bn_b, &mut b.bn_s]);
+        }
+        for (_, bn) in &mut self.hidden {
+            v.push(bn);
+        }
+        v.into_iter()
+            .flat_map(|b| [&mut b.running_mean, &mut b.running_var])
+            .collect()
+    }
+
+    /// The whole training state — weights, Adam moments and step count,
+    /// running statistics — as bytes, for resumable checkpoints.
+    pub fn state_bytes(&mut self) -> Vec<u8> {
+        let mut out = STATE_MAGIC.to_vec();
+        out.extend_from_slice(&self.t.to_le_bytes());
+        for p in self.params_mut() {
+            for a in [&p.value, &p.m, &p.v] {
+                a.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+            }
+        }
+        for r in self.running_mut() {
+            r.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        }
+        out
+    }
+
+    /// Restores a state written by [`Trainer::state_bytes`] of a network
+    /// of the same architecture.
+    ///
+    /// # Errors
+    /// [`CnnError::BufferSize`] when `bytes` is not such a state.
+    pub fn load_state_bytes(&mut self, bytes: &[u8]) -> Result<(), CnnError> {
+        let floats: usize = self.params_mut().iter().map(|p| 3 * p.value.len()).sum::<usize>()
+            + self.running_mut().iter().map(|r| r.len()).sum::<usize>();
+        let expected = STATE_MAGIC.len() + 4 + 4 * floats;
+        if bytes.len() != expected || !bytes.starts_with(STATE_MAGIC) {
+            return Err(CnnError::BufferSize {
+                what: "training state",
+                actual: bytes.len(),
+                expected,
+            });
+        }
+        let mut at = STATE_MAGIC.len();
+        self.t = i32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+        at += 4;
+        let mut read = |a: &mut Vec<f32>| {
+            for x in a.iter_mut() {
+                *x = f32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+                at += 4;
+            }
+        };
+        for p in self.params_mut() {
+            read(&mut p.value);
+            read(&mut p.m);
+            read(&mut p.v);
+        }
+        for r in self.running_mut() {
+            read(r);
+        }
+        self.stem.refresh();
+        for b in &mut self.blocks {
+            b.a.refresh();
+            b.b.refresh();
+            b.s.refresh();
+        }
+        Ok(())
     }
 
     /// Sets every gradient to zero.

@@ -1,0 +1,130 @@
+//! The reverse of [`crate::export`]: weights trained on the CPU engine
+//! (`normalnet_cnn::Trainer`) into a burn [`NormalNet`], so bundles keep
+//! their format. Tensors are matched by module path and shape.
+
+use burn::module::{Module, ModuleMapper, Param};
+use burn::tensor::{Device, Tensor, TensorData};
+use normalnet_cnn::{BatchNormWeights, ConvWeights, LinearWeights, NetWeights};
+use std::collections::HashMap;
+
+use crate::export::ExportError;
+use crate::model::{ModelConfig, NormalNet};
+
+/// Sets every float tensor from a table keyed by module path.
+struct Setter {
+    path: Vec<String>,
+    tensors: HashMap<String, Vec<f32>>,
+    device: Device,
+    failed: Option<String>,
+}
+
+impl ModuleMapper for Setter {
+    fn enter_module(&mut self, name: &str, _container: &str) {
+        self.path.push(name.to_string());
+    }
+
+    fn exit_module(&mut self, _name: &str, _container: &str) {
+        self.path.pop();
+    }
+
+    fn map_float<const D: usize>(&mut self, param: Param<Tensor<D>>) -> Param<Tensor<D>> {
+        let path = self.path.join(".");
+        let (id, tensor, _) = param.consume();
+        let dims: [usize; D] = tensor.dims();
+        match self.tensors.remove(&path) {
+            Some(values) if values.len() == dims.iter().product::<usize>() => {
+                let t = Tensor::from_data(TensorData::new(values, dims), &self.device);
+                Param::initialized(id, if tensor.is_require_grad() { t.require_grad() } else { t })
+            }
+            Some(values) => {
+                self.failed = Some(format!("{path}: {} values for shape {dims:?}", values.len()));
+                Param::initialized(id, tensor)
+            }
+            None => {
+                self.failed = Some(format!("{path}: no values"));
+                Param::initialized(id, tensor)
+            }
+        }
+    }
+}
+
+fn put_conv(t: &mut HashMap<String, Vec<f32>>, prefix: &str, c: &ConvWeights) {
+    t.insert(format!("{prefix}.weight"), c.weight.clone());
+}
+
+fn put_bn(t: &mut HashMap<String, Vec<f32>>, prefix: &str, b: &BatchNormWeights) {
+    t.insert(format!("{prefix}.gamma"), b.gamma.clone());
+    t.insert(format!("{prefix}.beta"), b.beta.clone());
+    t.insert(format!("{prefix}.running_mean"), b.mean.clone());
+    t.insert(format!("{prefix}.running_var"), b.var.clone());
+}
+
+fn put_linear(t: &mut HashMap<String, Vec<f32>>, prefix: &str, l: &LinearWeights) {
+    t.insert(format!("{prefix}.weight"), l.weight.clone());
+    t.insert(
+        format!("{prefix}.bias"),
+        l.bias.clone().unwrap_or_else(|| vec![0.0; l.out_features]),
+    );
+}
+
+/// A burn network of architecture `config` holding the weights `w`.
+///
+/// # Errors
+/// [`ExportError`] when `w` does not have the shapes of `config` (or holds
+/// convolution biases, which [`NormalNet`] does not have).
+pub fn normal_net(config: &ModelConfig, w: &NetWeights, device: &Device) -> Result<NormalNet, ExportError> {
+    let mut t = HashMap::new();
+    if w.stem.bias.is_some() || w.blocks.iter().any(|b| b.conv_a.bias.is_some() || b.conv_b.bias.is_some() || b.shortcut.bias.is_some()) {
+        return Err(ExportError("convolution biases have no place in NormalNet".into()));
+    }
+    put_conv(&mut t, "conv_in", &w.stem);
+    put_bn(&mut t, "bn_in", &w.stem_bn);
+    for (i, b) in w.blocks.iter().enumerate() {
+        let p = format!("blocks.{i}");
+        put_conv(&mut t, &format!("{p}.conv_a"), &b.conv_a);
+        put_bn(&mut t, &format!("{p}.bn_a"), &b.bn_a);
+        put_conv(&mut t, &format!("{p}.conv_b"), &b.conv_b);
+        put_bn(&mut t, &format!("{p}.bn_b"), &b.bn_b);
+        put_conv(&mut t, &format!("{p}.shortcut"), &b.shortcut);
+        put_bn(&mut t, &format!("{p}.bn_shortcut"), &b.bn_shortcut);
+    }
+    for (i, (l, bn)) in w.hidden.iter().enumerate() {
+        put_linear(&mut t, &format!("fc.{i}"), l);
+        put_bn(&mut t, &format!("bn_fc.{i}"), bn);
+    }
+    put_linear(&mut t, "out", &w.output);
+    let mut setter = Setter {
+        path: Vec::new(),
+        tensors: t,
+        device: device.clone(),
+        failed: None,
+    };
+    let net = config.init(device, 0).map(&mut setter);
+    if let Some(e) = setter.failed {
+        return Err(ExportError(e));
+    }
+    if let Some(extra) = setter.tensors.keys().next() {
+        return Err(ExportError(format!("{extra}: not a tensor of the network")));
+    }
+    Ok(net)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::export::net_weights;
+
+    #[test]
+    fn import_then_export_is_the_identity() {
+        let device = Device::flex();
+        let config = ModelConfig::tiny();
+        let mut w = net_weights(&config.init(&device, 3), &config).unwrap();
+        w.stem_bn.mean[0] = 0.25;
+        w.blocks[1].bn_b.var[2] = 1.5;
+        let net = normal_net(&config, &w, &device).unwrap();
+        assert!(net_weights(&net, &config).unwrap() == w);
+        let mut bad = w.clone();
+        bad.output.weight.pop();
+        assert!(normal_net(&config, &bad, &device).is_err());
+    }
+}

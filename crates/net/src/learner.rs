@@ -1,0 +1,206 @@
+//! The network being trained, on one of two engines: the CPU engine of
+//! `normalnet-cnn` (`Trainer`: sparse first layer, hand-written backward
+//! pass; the default) or burn's autodiff (the reference it was checked
+//! against). Both start from and save to burn [`NormalNet`] files, so
+//! bundles do not depend on the engine.
+
+use std::path::Path;
+
+use burn::module::Module;
+use burn::optim::ModuleOptimizer;
+use burn::tensor::Device;
+use normalnet_cnn::{Cnn, Loss, Trainer};
+
+use crate::NetError;
+use crate::bundle::save_network;
+use crate::data::SampleBatch;
+use crate::model::{ModelConfig, NormalNet};
+use crate::step::{adam, train_step};
+
+/// Which engine trains.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Engine {
+    /// `normalnet_cnn::Trainer` (CPU, f32)
+    Cnn,
+    /// burn autodiff on the Flex backend (MSE only)
+    Burn,
+}
+
+impl Engine {
+    /// `cnn` or `burn`.
+    pub fn parse(name: &str) -> Option<Engine> {
+        match name {
+            "cnn" => Some(Engine::Cnn),
+            "burn" => Some(Engine::Burn),
+            _ => None,
+        }
+    }
+}
+
+/// A network being trained and its optimiser state.
+pub(crate) enum Learner {
+    Cnn {
+        trainer: Box<Trainer>,
+        config: ModelConfig,
+        loss: Loss,
+    },
+    Burn {
+        model: Option<NormalNet>,
+        optim: ModuleOptimizer,
+        device: Device,
+    },
+}
+
+fn record(path: &Path, e: impl ToString) -> NetError {
+    NetError::Record {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+impl Learner {
+    /// Starts from `net` (any device).
+    pub(crate) fn new(
+        engine: Engine,
+        net: NormalNet,
+        config: &ModelConfig,
+        loss: Loss,
+    ) -> Result<Learner, NetError> {
+        Ok(match engine {
+            Engine::Cnn => {
+                let w = crate::export::net_weights(&net.valid(), config)
+                    .map_err(|e| record(Path::new("<model>"), e))?;
+                Learner::Cnn {
+                    trainer: Box::new(
+                        Trainer::new(&w).map_err(|e| record(Path::new("<model>"), e))?,
+                    ),
+                    config: config.clone(),
+                    loss,
+                }
+            }
+            Engine::Burn => {
+                let device = Device::flex().autodiff();
+                Learner::Burn {
+                    model: Some(net.valid().fork(&device).train()),
+                    optim: adam(),
+                    device,
+                }
+            }
+        })
+    }
+
+    /// One optimisation step; the batch loss before it.
+    pub(crate) fn step(&mut self, batch: &SampleBatch, lr: f64) -> Result<f64, NetError> {
+        match self {
+            Learner::Cnn { trainer, loss, .. } => trainer
+                .train_step(&batch.grids, &batch.targets, *loss, lr)
+                .map_err(|e| record(Path::new("<batch>"), e)),
+            Learner::Burn {
+                model,
+                optim,
+                device,
+            } => {
+                let m = model.take().expect("model present between steps");
+                let (m, l) = train_step(m, optim, batch, lr, device);
+                *model = Some(m);
+                Ok(l)
+            }
+        }
+    }
+
+    /// The current network as a burn module (inference mode).
+    pub(crate) fn network(&self) -> Result<NormalNet, NetError> {
+        match self {
+            Learner::Cnn {
+                trainer, config, ..
+            } => crate::import::normal_net(config, &trainer.weights(), &Device::flex())
+                .map_err(|e| record(Path::new("<model>"), e)),
+            Learner::Burn { model, .. } => Ok(model.as_ref().expect("model").valid()),
+        }
+    }
+
+    /// The current network compiled for the CPU inference engine.
+    pub(crate) fn compiled(&self, grid: usize) -> Result<Cnn, NetError> {
+        match self {
+            Learner::Cnn { trainer, .. } => {
+                Cnn::new(&trainer.weights()).map_err(|e| record(Path::new("<model>"), e))
+            }
+            Learner::Burn { model, .. } => {
+                crate::export::compile_for_grid(&model.as_ref().expect("model").valid(), grid)
+                    .map_err(|e| record(Path::new("<model>"), e))
+            }
+        }
+    }
+
+    /// Saves the network as a bundle file.
+    pub(crate) fn save(&self, file: &Path) -> Result<(), NetError> {
+        save_network(&self.network()?, file)
+    }
+
+    /// Writes a resumable checkpoint into `dir`.
+    pub(crate) fn checkpoint(&mut self, dir: &Path) -> Result<(), NetError> {
+        match self {
+            Learner::Cnn { trainer, .. } => {
+                crate::bundle::write_atomically(&dir.join("trainer.state"), &trainer.state_bytes())
+            }
+            Learner::Burn { model, optim, .. } => {
+                let tmp = dir.join("model.tmp.bpk");
+                model
+                    .as_ref()
+                    .expect("model")
+                    .clone()
+                    .save_file(&tmp)
+                    .map_err(|e| record(&tmp, e))?;
+                std::fs::rename(&tmp, dir.join("model.bpk")).map_err(|e| NetError::io(dir, e))?;
+                let tmp = dir.join("optim.tmp.bpk");
+                optim.save(&tmp).map_err(|e| record(&tmp, e))?;
+                std::fs::rename(&tmp, dir.join("optim.bpk")).map_err(|e| NetError::io(dir, e))
+            }
+        }
+    }
+
+    /// Restores a checkpoint of `dir`; false when there is none.
+    pub(crate) fn restore(&mut self, dir: &Path, config: &ModelConfig) -> Result<bool, NetError> {
+        match self {
+            Learner::Cnn { trainer, .. } => {
+                let file = dir.join("trainer.state");
+                if !file.is_file() {
+                    return Ok(false);
+                }
+                let bytes = std::fs::read(&file).map_err(|e| NetError::io(&file, e))?;
+                trainer
+                    .load_state_bytes(&bytes)
+                    .map_err(|e| record(&file, e))?;
+                Ok(true)
+            }
+            Learner::Burn {
+                model,
+                optim,
+                device,
+            } => {
+                let file = dir.join("model.bpk");
+                if !file.is_file() {
+                    return Ok(false);
+                }
+                let m = config
+                    .init(device, 0)
+                    .try_load_file(&file)
+                    .map_err(|e| record(&file, e))?;
+                *model = Some(m);
+                let file = dir.join("optim.bpk");
+                if file.is_file() {
+                    let o = std::mem::replace(optim, adam());
+                    *optim = o.load(&file).map_err(|e| record(&file, e))?;
+                }
+                Ok(true)
+            }
+        }
+    }
+
+    /// Removes the checkpoint files of `dir`.
+    pub(crate) fn clear_checkpoint(dir: &Path) {
+        for f in ["trainer.state", "model.bpk", "optim.bpk"] {
+            let _ = std::fs::remove_file(dir.join(f));
+        }
+    }
+}
