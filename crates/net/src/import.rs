@@ -67,16 +67,10 @@ fn put_linear(t: &mut HashMap<String, Vec<f32>>, prefix: &str, l: &LinearWeights
     );
 }
 
-/// A burn network of architecture `config` holding the weights `w`.
-///
-/// # Errors
-/// [`ExportError`] when `w` does not have the shapes of `config` (or holds
-/// convolution biases, which [`NormalNet`] does not have).
-pub fn normal_net(config: &ModelConfig, w: &NetWeights, device: &Device) -> Result<NormalNet, ExportError> {
+/// The arrays of `w` keyed by their burn module path (`conv_in.weight`,
+/// `blocks.0.bn_a.running_var`, `fc.2.bias`, ...), in burn's layouts.
+pub fn tensors_by_path(w: &NetWeights) -> HashMap<String, Vec<f32>> {
     let mut t = HashMap::new();
-    if w.stem.bias.is_some() || w.blocks.iter().any(|b| b.conv_a.bias.is_some() || b.conv_b.bias.is_some() || b.shortcut.bias.is_some()) {
-        return Err(ExportError("convolution biases have no place in NormalNet".into()));
-    }
     put_conv(&mut t, "conv_in", &w.stem);
     put_bn(&mut t, "bn_in", &w.stem_bn);
     for (i, b) in w.blocks.iter().enumerate() {
@@ -93,6 +87,29 @@ pub fn normal_net(config: &ModelConfig, w: &NetWeights, device: &Device) -> Resu
         put_bn(&mut t, &format!("bn_fc.{i}"), bn);
     }
     put_linear(&mut t, "out", &w.output);
+    t
+}
+
+/// A burn network of architecture `config` holding the weights `w`.
+///
+/// # Errors
+/// [`ExportError`] when `w` does not have the shapes of `config` (or holds
+/// convolution biases, which [`NormalNet`] does not have).
+pub fn normal_net(
+    config: &ModelConfig,
+    w: &NetWeights,
+    device: &Device,
+) -> Result<NormalNet, ExportError> {
+    let has_bias = w.stem.bias.is_some()
+        || w.blocks.iter().any(|b| {
+            b.conv_a.bias.is_some() || b.conv_b.bias.is_some() || b.shortcut.bias.is_some()
+        });
+    if has_bias {
+        return Err(ExportError(
+            "convolution biases have no place in NormalNet".into(),
+        ));
+    }
+    let t = tensors_by_path(w);
     let mut setter = Setter {
         path: Vec::new(),
         tensors: t,
