@@ -31,38 +31,59 @@ pub(crate) struct BatchStats {
     pub shift: Vec<f32>,
 }
 
-/// Per-channel sums over each sample, then over samples in order.
-fn channel_sums(
+/// Two per-channel sums `(Σ f, Σ g)` over `data` (and `other`, the same
+/// shape, when given): f32 within blocks of 64 cubes, f64 across blocks,
+/// samples in order (thread-count independent).
+fn channel_sums2(
     data: &[f32],
+    other: Option<&[f32]>,
     samples: usize,
     c: usize,
-    f: impl Fn(usize, f32) -> f64 + Sync,
-) -> Vec<f64> {
+    f: impl Fn(usize, f32, f32) -> (f32, f32) + Sync,
+) -> (Vec<f64>, Vec<f64>) {
     let per = data.len() / samples;
-    let partial: Vec<Vec<f64>> = data
-        .par_chunks(per)
-        .map(|s| {
-            let mut acc = vec![0.0f64; c];
-            // sum rows in f32 blocks of 64 cubes, then into f64: exact enough
-            // and vectorises
-            for block in s.chunks(64 * c) {
-                let mut b = vec![0.0f32; c];
-                for row in block.chunks_exact(c) {
-                    for (j, (a, &v)) in b.iter_mut().zip(row).enumerate() {
-                        *a += f(j, v) as f32;
+    let one = |s: usize| {
+        let d = &data[s * per..(s + 1) * per];
+        let o = other.map(|o| &o[s * per..(s + 1) * per]);
+        let mut acc = (vec![0.0f64; c], vec![0.0f64; c]);
+        let (mut a, mut b) = (vec![0.0f32; c], vec![0.0f32; c]);
+        for start in (0..per).step_by(64 * c) {
+            let end = (start + 64 * c).min(per);
+            a.fill(0.0);
+            b.fill(0.0);
+            for r in (start..end).step_by(c) {
+                let row = &d[r..r + c];
+                match o {
+                    Some(o) => {
+                        let orow = &o[r..r + c];
+                        for j in 0..c {
+                            let (x, y) = f(j, row[j], orow[j]);
+                            a[j] += x;
+                            b[j] += y;
+                        }
+                    }
+                    None => {
+                        for j in 0..c {
+                            let (x, y) = f(j, row[j], 0.0);
+                            a[j] += x;
+                            b[j] += y;
+                        }
                     }
                 }
-                for (a, &v) in acc.iter_mut().zip(&b) {
-                    *a += v as f64;
-                }
             }
-            acc
-        })
-        .collect();
-    let mut total = vec![0.0f64; c];
-    for p in &partial {
-        for (t, &v) in total.iter_mut().zip(p) {
-            *t += v;
+            for j in 0..c {
+                acc.0[j] += a[j] as f64;
+                acc.1[j] += b[j] as f64;
+            }
+        }
+        acc
+    };
+    let partial: Vec<(Vec<f64>, Vec<f64>)> = (0..samples).into_par_iter().map(one).collect();
+    let mut total = (vec![0.0f64; c], vec![0.0f64; c]);
+    for (a, b) in &partial {
+        for j in 0..c {
+            total.0[j] += a[j];
+            total.1[j] += b[j];
         }
     }
     total
@@ -94,22 +115,22 @@ impl BatchNorm {
     }
 
     /// Statistics of `data` (`[samples][cubes][c]`); updates the running
-    /// statistics when `update`.
+    /// statistics when `update`. One pass: sums of `z − K` and `(z − K)²`
+    /// with `K` the running mean (close to the batch mean, so no
+    /// cancellation).
     pub(crate) fn stats(&mut self, data: &[f32], samples: usize, update: bool) -> BatchStats {
         let c = self.channels();
         let count = (data.len() / c) as f64;
-        let mean: Vec<f64> = channel_sums(data, samples, c, |_, v| v as f64)
-            .into_iter()
-            .map(|s| s / count)
+        let k = self.running_mean.clone();
+        let (s1, s2) = channel_sums2(data, None, samples, c, |j, v, _| {
+            let d = v - k[j];
+            (d, d * d)
+        });
+        let mean: Vec<f64> = (0..c).map(|j| k[j] as f64 + s1[j] / count).collect();
+        let var: Vec<f64> = (0..c)
+            .map(|j| (s2[j] / count - (s1[j] / count).powi(2)).max(0.0))
             .collect();
         let mean32: Vec<f32> = mean.iter().map(|&m| m as f32).collect();
-        let var: Vec<f64> = channel_sums(data, samples, c, |j, v| {
-            let d = v - mean32[j];
-            (d * d) as f64
-        })
-        .into_iter()
-        .map(|s| s / count)
-        .collect();
         if update {
             for j in 0..c {
                 self.running_mean[j] =
@@ -122,9 +143,7 @@ impl BatchNorm {
             .iter()
             .map(|&v| (1.0 / (v + self.epsilon).sqrt()) as f32)
             .collect();
-        let scale: Vec<f32> = (0..c)
-            .map(|j| self.gamma.value[j] * inv_std[j])
-            .collect();
+        let scale: Vec<f32> = (0..c).map(|j| self.gamma.value[j] * inv_std[j]).collect();
         let shift = (0..c)
             .map(|j| self.beta.value[j] - mean32[j] * scale[j])
             .collect();
@@ -138,38 +157,28 @@ impl BatchNorm {
 
     /// Backward pass: `g` holds `∂L/∂y` on entry and `∂L/∂z` on return;
     /// adds `∂L/∂γ`, `∂L/∂β` to the parameter gradients. `z`: the layer's
-    /// input, `[samples][cubes][c]`.
-    pub(crate) fn backward(&mut self, st: &BatchStats, z: &[f32], g: &mut [f32], samples: usize) {
+    /// input, `[samples][cubes][c]`. With `relu`, `y` is followed by a ReLU
+    /// and `g` is the gradient of its output (the mask is recomputed from
+    /// `z`, so the ReLU's output need not be read).
+    pub(crate) fn backward(
+        &mut self,
+        st: &BatchStats,
+        z: &[f32],
+        g: &mut [f32],
+        samples: usize,
+        relu: bool,
+    ) {
         let c = self.channels();
         let count = (z.len() / c) as f64;
-        let sum_g = channel_sums(g, samples, c, |_, v| v as f64);
-        // Σ g·x̂ = inv_std · Σ g·(z − mean)
-        let per = z.len() / samples;
-        let partial: Vec<Vec<f64>> = z
-            .par_chunks(per)
-            .zip(g.par_chunks(per))
-            .map(|(zs, gs)| {
-                let mut acc = vec![0.0f64; c];
-                for (zb, gb) in zs.chunks(64 * c).zip(gs.chunks(64 * c)) {
-                    let mut b = vec![0.0f32; c];
-                    for (zr, gr) in zb.chunks_exact(c).zip(gb.chunks_exact(c)) {
-                        for j in 0..c {
-                            b[j] += gr[j] * (zr[j] - st.mean[j]);
-                        }
-                    }
-                    for (a, &v) in acc.iter_mut().zip(&b) {
-                        *a += v as f64;
-                    }
-                }
-                acc
-            })
-            .collect();
-        let mut sum_gx = vec![0.0f64; c];
-        for p in &partial {
-            for (t, &v) in sum_gx.iter_mut().zip(p) {
-                *t += v;
+        let live = |j: usize, zv: f32| !relu || zv * st.scale[j] + st.shift[j] > 0.0;
+        // Σ g and Σ g·(z − mean), masked
+        let (sum_g, mut sum_gx) = channel_sums2(g, Some(z), samples, c, |j, gv, zv| {
+            if live(j, zv) {
+                (gv, gv * (zv - st.mean[j]))
+            } else {
+                (0.0, 0.0)
             }
-        }
+        });
         for j in 0..c {
             sum_gx[j] *= st.inv_std[j] as f64;
             self.gamma.grad[j] += sum_gx[j] as f32;
@@ -183,12 +192,14 @@ impl BatchNorm {
         let mx: Vec<f32> = (0..c)
             .map(|j| (sum_gx[j] / count) as f32 * st.inv_std[j])
             .collect();
+        let per = z.len() / samples;
         g.par_chunks_mut(per)
             .zip(z.par_chunks(per))
             .for_each(|(gs, zs)| {
                 for (gr, zr) in gs.chunks_exact_mut(c).zip(zs.chunks_exact(c)) {
                     for j in 0..c {
-                        gr[j] = a[j] * (gr[j] - mg[j] - (zr[j] - st.mean[j]) * mx[j]);
+                        let gv = if live(j, zr[j]) { gr[j] } else { 0.0 };
+                        gr[j] = a[j] * (gv - mg[j] - (zr[j] - st.mean[j]) * mx[j]);
                     }
                 }
             });

@@ -889,11 +889,10 @@ impl Trainer {
         let mut dx = vec![0.0f32; last_x.len()];
         self.output.backward(last_x, &dz, Some(&mut dx));
         for i in (0..self.hidden.len()).rev() {
-            let (z, h, st) = &c.fc[i];
+            let (z, _, st) = &c.fc[i];
             let mut g = dx;
-            relu_mask(&mut g, h);
             let (l, bn) = &mut self.hidden[i];
-            bn.backward(st, z, &mut g, samples);
+            bn.backward(st, z, &mut g, samples, true);
             let x: &[f32] = if i == 0 { &c.pooled } else { &c.fc[i - 1].1 };
             dx = vec![0.0f32; x.len()];
             l.backward(x, &g, Some(&mut dx));
@@ -919,12 +918,11 @@ impl Trainer {
             let x: &[f32] = if bi == 0 { &c.a0 } else { &c.blocks[bi - 1].out };
             relu_mask(&mut d_out, &bc.out);
             let mut d_zs = d_out.clone();
-            b.bn_b.backward(&bc.st_b, &bc.zb, &mut d_out, samples);
-            b.bn_s.backward(&bc.st_s, &bc.zs, &mut d_zs, samples);
+            b.bn_b.backward(&bc.st_b, &bc.zb, &mut d_out, samples, false);
+            b.bn_s.backward(&bc.st_s, &bc.zs, &mut d_zs, samples, false);
             let mut d_aa = vec![0.0f32; bc.aa.len()];
             b.b.backward(lv, &bc.aa, b.m, &d_out, samples, Some(&mut d_aa), false);
-            relu_mask(&mut d_aa, &bc.aa);
-            b.bn_a.backward(&bc.st_a, &bc.za, &mut d_aa, samples);
+            b.bn_a.backward(&bc.st_a, &bc.za, &mut d_aa, samples, true);
             let mut d_x = vec![0.0f32; x.len()];
             b.a.backward(lv, x, b.n, &d_aa, samples, Some(&mut d_x), false);
             b.s.backward(lv, x, b.n, &d_zs, samples, Some(&mut d_x), true);
@@ -932,8 +930,7 @@ impl Trainer {
             self.prof.lap(|| format!("block {} backward", bi + 1));
         }
         // stem: weight gradient scattered from the occupied cubes
-        relu_mask(&mut d_out, &c.a0);
-        self.stem_bn.backward(&c.st0, &c.z0, &mut d_out, samples);
+        self.stem_bn.backward(&c.st0, &c.z0, &mut d_out, samples, true);
         dz.clear();
         let per = d_out.len() / samples;
         let (sh, grid, len) = (self.stem.sh, self.grid, self.stem.p.value.len());
