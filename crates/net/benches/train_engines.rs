@@ -16,37 +16,6 @@ use normalnet_net::ModelConfig;
 use normalnet_net::data::SampleBatch;
 use normalnet_net::export::net_weights;
 use normalnet_net::step::{adam, train_step};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-
-/// Sheet-like grids: a tilted, noisy plane of normals through the middle.
-fn batch(side: usize, len: usize) -> SampleBatch {
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let cubes = side * side * side;
-    let mut b = SampleBatch::with_capacity(side, len);
-    for _ in 0..len {
-        let mut g = vec![0.0f32; 3 * cubes];
-        let tilt: f32 = rng.random_range(-0.4..0.4);
-        for d in 0..side {
-            for w in 0..side {
-                let h0 = (side as f32 / 2.0 + tilt * (d as f32 - side as f32 / 2.0)) as usize;
-                for h in [h0, h0 + 1] {
-                    if h < side && rng.random_bool(0.8) {
-                        let i = (d * side + h) * side + w;
-                        g[i] = rng.random_range(-0.3..0.3);
-                        g[cubes + i] = rng.random_range(0.7..1.0);
-                        g[2 * cubes + i] = rng.random_range(-0.3..0.3);
-                    }
-                }
-            }
-        }
-        b.grids.extend(g);
-        b.targets
-            .extend((0..18).map(|_| rng.random_range(-0.8f32..0.8)));
-    }
-    b.len = len;
-    b
-}
 
 fn main() {
     let threads: usize = std::env::args()
@@ -58,7 +27,7 @@ fn main() {
         .build()
         .unwrap();
     let config = ModelConfig::lite();
-    let b = batch(config.grid, 80);
+    let b = SampleBatch::sheets(config.grid, 80, 7);
     let net = config.init(&Device::flex(), 1);
     let (ours, burn) = pool.install(|| {
         let mut t = Trainer::new(&net_weights(&net, &config).unwrap()).unwrap();

@@ -30,6 +30,38 @@ impl SampleBatch {
         }
     }
 
+    /// Synthetic samples for tests and benchmarks: grids holding a tilted,
+    /// noisy sheet of normals through the middle (a face neighbourhood's
+    /// shape: a few % of the cubes occupied), targets uniform in ±0.8.
+    pub fn sheets(side: usize, len: usize, seed: u64) -> SampleBatch {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let cubes = side * side * side;
+        let mut b = SampleBatch::with_capacity(side, len);
+        for _ in 0..len {
+            let mut g = vec![0.0f32; 3 * cubes];
+            let tilt: f32 = rng.random_range(-0.4..0.4);
+            for d in 0..side {
+                for w in 0..side {
+                    let h0 = (side as f32 / 2.0 + tilt * (d as f32 - side as f32 / 2.0)) as usize;
+                    for h in [h0, h0 + 1] {
+                        if h < side && rng.random_bool(0.8) {
+                            let i = (d * side + h) * side + w;
+                            g[i] = rng.random_range(-0.3..0.3);
+                            g[cubes + i] = rng.random_range(0.7..1.0);
+                            g[2 * cubes + i] = rng.random_range(-0.3..0.3);
+                        }
+                    }
+                }
+            }
+            b.grids.extend(g);
+            b.targets
+                .extend((0..crate::model::NUM_OUTPUTS).map(|_| rng.random_range(-0.8f32..0.8)));
+        }
+        b.len = len;
+        b
+    }
+
     /// Values in one grid.
     pub fn grid_len(&self) -> usize {
         grid_len(self.side)

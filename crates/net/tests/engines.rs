@@ -13,35 +13,9 @@ use normalnet_net::export::net_weights;
 use normalnet_net::import::tensors_by_path;
 use normalnet_net::step::{adam, mse, train_step};
 use normalnet_net::{ModelConfig, NormalNet};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 
-/// Sheet-like grids (a noisy plane through the middle) and random targets.
 fn batch(side: usize, len: usize, seed: u64) -> SampleBatch {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let cubes = side * side * side;
-    let mut b = SampleBatch::with_capacity(side, len);
-    for _ in 0..len {
-        let mut g = vec![0.0f32; 3 * cubes];
-        let tilt: f32 = rng.random_range(-0.4..0.4);
-        for d in 0..side {
-            for w in 0..side {
-                let h = (side as f32 / 2.0 + tilt * (d as f32 - side as f32 / 2.0)) as usize;
-                if h < side && rng.random_bool(0.9) {
-                    let i = (d * side + h) * side + w;
-                    g[i] = rng.random_range(-0.3..0.3);
-                    g[cubes + i] = rng.random_range(0.7..1.0);
-                    g[2 * cubes + i] = rng.random_range(-0.3..0.3);
-                }
-            }
-        }
-        b.grids.extend(g);
-        for _ in 0..18 {
-            b.targets.push(rng.random_range(-0.8..0.8));
-        }
-    }
-    b.len = len;
-    b
+    SampleBatch::sheets(side, len, seed)
 }
 
 struct Grads<'a> {

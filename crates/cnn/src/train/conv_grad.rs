@@ -325,91 +325,57 @@ fn stem_weight_grad_kernel<const CO: usize, F: MulAdd>(
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-mod avx512 {
-    use super::*;
+/// The kernels compiled for one instruction set (`$features`), with fused
+/// multiply-add.
+macro_rules! compiled_for {
+    ($name:ident, $features:literal) => {
+        #[cfg(target_arch = "x86_64")]
+        mod $name {
+            use super::*;
 
-    #[target_feature(enable = "avx512f,avx2,fma")]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn input_grad_kernel<const CI: usize, const S: usize>(
-        sh: &ConvShape,
-        wt: &[f32],
-        dz: &[f32],
-        n: usize,
-        m: usize,
-        dx: &mut [f32],
-        accumulate: bool,
-        ax: &[Vec<(usize, usize)>],
-    ) {
-        super::input_grad_kernel::<CI, S, Fused>(sh, wt, dz, n, m, dx, accumulate, ax)
-    }
+            #[target_feature(enable = $features)]
+            #[allow(clippy::too_many_arguments)]
+            pub(super) fn input_grad_kernel<const CI: usize, const S: usize>(
+                sh: &ConvShape,
+                wt: &[f32],
+                dz: &[f32],
+                n: usize,
+                m: usize,
+                dx: &mut [f32],
+                accumulate: bool,
+                ax: &[Vec<(usize, usize)>],
+            ) {
+                super::input_grad_kernel::<CI, S, Fused>(sh, wt, dz, n, m, dx, accumulate, ax)
+            }
 
-    #[target_feature(enable = "avx512f,avx2,fma")]
-    pub(super) fn weight_grad_kernel<const CO: usize, const CB: usize>(
-        sh: &ConvShape,
-        x: &[f32],
-        dz: &[f32],
-        n: usize,
-        m: usize,
-        dw: &mut [f32],
-    ) {
-        super::weight_grad_kernel::<CO, CB, Fused>(sh, x, dz, n, m, dw)
-    }
+            #[target_feature(enable = $features)]
+            pub(super) fn weight_grad_kernel<const CO: usize, const CB: usize>(
+                sh: &ConvShape,
+                x: &[f32],
+                dz: &[f32],
+                n: usize,
+                m: usize,
+                dw: &mut [f32],
+            ) {
+                super::weight_grad_kernel::<CO, CB, Fused>(sh, x, dz, n, m, dw)
+            }
 
-    #[target_feature(enable = "avx512f,avx2,fma")]
-    pub(super) fn stem_weight_grad_kernel<const CO: usize>(
-        sh: &ConvShape,
-        occ: &Occupied,
-        n: usize,
-        dz: &[f32],
-        dw: &mut [f32],
-    ) {
-        super::stem_weight_grad_kernel::<CO, Fused>(sh, occ, n, dz, dw)
-    }
+            #[target_feature(enable = $features)]
+            pub(super) fn stem_weight_grad_kernel<const CO: usize>(
+                sh: &ConvShape,
+                occ: &Occupied,
+                n: usize,
+                dz: &[f32],
+                dw: &mut [f32],
+            ) {
+                super::stem_weight_grad_kernel::<CO, Fused>(sh, occ, n, dz, dw)
+            }
+        }
+    };
 }
 
-#[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use super::*;
-
-    #[target_feature(enable = "avx2,fma")]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn input_grad_kernel<const CI: usize, const S: usize>(
-        sh: &ConvShape,
-        wt: &[f32],
-        dz: &[f32],
-        n: usize,
-        m: usize,
-        dx: &mut [f32],
-        accumulate: bool,
-        ax: &[Vec<(usize, usize)>],
-    ) {
-        super::input_grad_kernel::<CI, S, Fused>(sh, wt, dz, n, m, dx, accumulate, ax)
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn weight_grad_kernel<const CO: usize, const CB: usize>(
-        sh: &ConvShape,
-        x: &[f32],
-        dz: &[f32],
-        n: usize,
-        m: usize,
-        dw: &mut [f32],
-    ) {
-        super::weight_grad_kernel::<CO, CB, Fused>(sh, x, dz, n, m, dw)
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) fn stem_weight_grad_kernel<const CO: usize>(
-        sh: &ConvShape,
-        occ: &Occupied,
-        n: usize,
-        dz: &[f32],
-        dw: &mut [f32],
-    ) {
-        super::stem_weight_grad_kernel::<CO, Fused>(sh, occ, n, dz, dw)
-    }
-}
+compiled_for!(avx512, "avx512f,avx2,fma");
+compiled_for!(avx2, "avx2,fma");
 
 #[cfg(test)]
 mod tests {
