@@ -109,6 +109,11 @@ pub struct NetworkInfo {
     pub validation_error_deg: f64,
     /// the same error of the input (noisy) normal vs the μ_g-0.35 target, for scale
     pub validation_baseline_deg: f64,
+    /// the network predicts `target − input normal` (local frame) and
+    /// inference adds the face's current normal back; false (bundles
+    /// before this field): it predicts the normal itself
+    #[serde(default)]
+    pub residual: bool,
 }
 
 impl Manifest {

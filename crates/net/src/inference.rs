@@ -121,11 +121,12 @@ pub fn denoise(
     for k in 1..=params.iterations {
         progress.message(&format!("iteration {k}/{}", params.iterations));
         let current = mesh.with_positions(positions.clone());
-        let net = &bundle.networks[network_for_iteration(k)];
+        let i = network_for_iteration(k);
         let (normals, t) = filtered_normals(
             &current,
             &topology,
-            net,
+            &bundle.networks[i],
+            bundle.manifest.networks[i].residual,
             bundle.voxel_params(),
             slot,
             params.batch,
@@ -153,6 +154,10 @@ pub fn denoise(
 /// One normal-filtering pass with one network: the world-frame normal of
 /// output `slot` for every face of `mesh` (len #F, unit length).
 ///
+/// With `residual`, the network's output is added to the face's current
+/// normal (in the local frame) before normalising (see
+/// [`crate::bundle::NetworkInfo::residual`]).
+///
 /// `yaws` (one per face, radians) rotates each face's frame about its local
 /// y axis; `None` = no yaw (what [`denoise`] uses). `progress` advances by
 /// one per face. The network runs on the burn-free CPU engine
@@ -166,6 +171,7 @@ pub fn filtered_normals(
     mesh: &Mesh,
     topology: &Topology,
     net: &NormalNet,
+    residual: bool,
     voxel: VoxelParams,
     slot: usize,
     batch: usize,
@@ -238,7 +244,10 @@ pub fn filtered_normals(
             for (i, frame) in frames.iter().enumerate() {
                 let f = start + i;
                 let o = &out[i * NUM_OUTPUTS + 3 * slot..i * NUM_OUTPUTS + 3 * slot + 3];
-                let local = [o[0] as f64, o[1] as f64, o[2] as f64];
+                let mut local = [o[0] as f64, o[1] as f64, o[2] as f64];
+                if residual {
+                    local = vec3::add(local, frame.to_local(fallback[f]));
+                }
                 if !local.iter().all(|v| v.is_finite()) {
                     return Err(NetError::NonFiniteOutput { face: f });
                 }
@@ -298,6 +307,7 @@ mod tests {
             mesh,
             &topology,
             net,
+            false,
             VoxelParams::tiny(),
             2,
             64,

@@ -121,6 +121,10 @@ pub struct TrainConfig {
     pub engine: String,
     /// loss on the 18 outputs: `mse` (SPEC §8) or `l1` (cnn engine only)
     pub loss: String,
+    /// networks from this one on (1-based; 0 = none) predict the residual
+    /// `target − input normal` instead of the normal (see
+    /// `NetworkInfo::residual`)
+    pub residual_from: usize,
 }
 
 impl Default for TrainConfig {
@@ -148,6 +152,7 @@ impl Default for TrainConfig {
             stop_after: 6,
             engine: "cnn".into(),
             loss: "mse".into(),
+            residual_from: 0,
         }
     }
 }
@@ -226,6 +231,11 @@ impl TrainConfig {
         base * self
             .lr_decay
             .powf(step as f64 / self.lr_decay_steps.max(1) as f64)
+    }
+
+    /// Whether network `k` (0-based) predicts residuals.
+    pub fn residual(&self, k: usize) -> bool {
+        self.residual_from > 0 && k + 1 >= self.residual_from
     }
 
     fn loss_fn(&self) -> Option<Loss> {
@@ -410,15 +420,19 @@ pub fn train(
     for k in run.finished..INTERVALS.len().min(config.stop_after) {
         let net_start = Instant::now();
         progress.message(&format!("network {}: building samples", k + 1));
+        let residual = config.residual(k);
         let sources: Vec<SampleSource> = pairs
             .iter()
-            .map(|p| SampleSource::new(p.state.clone(), &p.clean, voxel, &MU_GS))
+            .map(|p| {
+                SampleSource::new(p.state.clone(), &p.clean, voxel, &MU_GS)
+                    .map(|s| s.with_residual(residual))
+            })
             .collect::<Result<_, _>>()?;
         let sources = Arc::new(sources);
         let sampler = BalancedSampler::new(sources.iter());
         let pool_faces: usize = sampler.category_sizes().iter().sum();
         total_pool = pool_faces;
-        let val = validation_set(&val_pairs, voxel, config, k)?;
+        let val = validation_set(&val_pairs, voxel, config, k, residual)?;
         // model: resume checkpoint, else warm start, else fresh
         let ckpt_dir = out.join("checkpoint");
         let engine = Engine::parse(&config.engine).unwrap_or(Engine::Cnn);
@@ -432,6 +446,13 @@ pub fn train(
             )?
         } else {
             model_config.init(&plain, config.seed + k as u64)
+        };
+        // a network that starts predicting residuals starts at the identity:
+        // zero output layer (its own gradient is not zero, so it learns)
+        let start_net = if residual {
+            zero_output_layer(start_net, &model_config)?
+        } else {
+            start_net
         };
         let mut learner = Learner::new(engine, start_net, &model_config, loss_fn)?;
         let resumed = resume && run.step > 0 && learner.restore(&ckpt_dir, &model_config)?;
@@ -539,6 +560,7 @@ pub fn train(
             train_loss: mean(&run.loss_tail),
             validation_error_deg: run.best_val,
             validation_baseline_deg: baseline,
+            residual,
         };
         networks.push(best);
         run.networks.truncate(k);
@@ -549,6 +571,7 @@ pub fn train(
             regenerate(
                 &mut pairs,
                 &networks[k],
+                residual,
                 voxel,
                 passes,
                 config.inference_batch,
@@ -558,6 +581,7 @@ pub fn train(
             regenerate(
                 &mut val_pairs,
                 &networks[k],
+                residual,
                 voxel,
                 passes,
                 config.inference_batch,
@@ -621,6 +645,20 @@ pub fn train(
     Ok(manifest)
 }
 
+/// `net` with its output layer's weights and bias set to zero.
+fn zero_output_layer(net: NormalNet, config: &ModelConfig) -> Result<NormalNet, NetError> {
+    let bad = |e: crate::export::ExportError| NetError::Record {
+        path: PathBuf::from("<model>"),
+        message: e.to_string(),
+    };
+    let mut w = crate::export::net_weights(&net, config).map_err(bad)?;
+    w.output.weight.fill(0.0);
+    if let Some(b) = w.output.bias.as_mut() {
+        b.fill(0.0);
+    }
+    crate::import::normal_net(config, &w, &Device::flex()).map_err(bad)
+}
+
 fn mean(v: &[f64]) -> f64 {
     if v.is_empty() {
         f64::NAN
@@ -676,6 +714,9 @@ fn save_state(out: &Path, run: &RunState) -> Result<(), NetError> {
 struct ValidationSet {
     batch: SampleBatch,
     baseline_deg: f64,
+    /// with residual targets: each face's input normal in its local frame
+    /// (added to outputs and targets before comparing)
+    inputs: Option<Vec<[f32; 3]>>,
 }
 
 fn validation_set(
@@ -683,11 +724,16 @@ fn validation_set(
     voxel: VoxelParams,
     config: &TrainConfig,
     k: usize,
+    residual: bool,
 ) -> Result<ValidationSet, NetError> {
     let sources: Vec<SampleSource> = pairs
         .iter()
-        .map(|p| SampleSource::new(p.state.clone(), &p.clean, voxel, &MU_GS))
+        .map(|p| {
+            SampleSource::new(p.state.clone(), &p.clean, voxel, &MU_GS)
+                .map(|s| s.with_residual(residual))
+        })
         .collect::<Result<_, _>>()?;
+    let mut inputs = Vec::new();
     let sampler = BalancedSampler::new(sources.iter());
     let items = sampler.draw_count_seeded(config.validation_faces, config.seed + 99 + k as u64);
     let mut batch = SampleBatch::with_capacity(voxel.side(), items.len());
@@ -697,8 +743,14 @@ fn validation_set(
         let src = &sources[it.source as usize];
         let start = batch.grids.len();
         batch.grids.resize(start + grid_len, 0.0);
-        let t = src.sample(it.face as usize, 0.0, &mut batch.grids[start..]);
+        let (t, frame) = src.sample_with(
+            &mut normalnet_voxel::Scratch::new(),
+            it.face as usize,
+            0.0,
+            &mut batch.grids[start..],
+        );
         batch.targets.extend_from_slice(&t);
+        inputs.push(src.local_input(&frame, it.face as usize));
         let current = src.voxelizer().geometry().normals[it.face as usize];
         let target = src.world_targets(it.face as usize)[VALIDATION_SLOT];
         baseline += vec3::angle(current, target).to_degrees();
@@ -707,6 +759,7 @@ fn validation_set(
     Ok(ValidationSet {
         baseline_deg: baseline / items.len().max(1) as f64,
         batch,
+        inputs: residual.then_some(inputs),
     })
 }
 
@@ -724,8 +777,9 @@ fn validation_error(cnn: &normalnet_cnn::Cnn, val: &ValidationSet) -> f64 {
     for i in 0..val.batch.len {
         let o = &out[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
         let t = &val.batch.targets[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
-        let o = [o[0] as f64, o[1] as f64, o[2] as f64];
-        let t = [t[0] as f64, t[1] as f64, t[2] as f64];
+        let base = val.inputs.as_ref().map_or([0.0; 3], |v| v[i]);
+        let o = [(o[0] + base[0]) as f64, (o[1] + base[1]) as f64, (o[2] + base[2]) as f64];
+        let t = [(t[0] + base[0]) as f64, (t[1] + base[1]) as f64, (t[2] + base[2]) as f64];
         sum += if vec3::norm(o) == 0.0 || !vec3::norm(o).is_finite() {
             90.0
         } else {
@@ -737,9 +791,11 @@ fn validation_error(cnn: &normalnet_cnn::Cnn, val: &ValidationSet) -> f64 {
 
 /// Runs `passes` filtering iterations on every pair's state: network `net`
 /// for pairs marked `regen`, the GT-guided oracle for the others.
+#[allow(clippy::too_many_arguments)]
 fn regenerate(
     pairs: &mut [Pair],
     net: &NormalNet,
+    residual: bool,
     voxel: VoxelParams,
     passes: usize,
     batch: usize,
@@ -759,6 +815,7 @@ fn regenerate(
                     &current,
                     &topology,
                     net,
+                    residual,
                     voxel,
                     slot,
                     batch,

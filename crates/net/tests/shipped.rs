@@ -50,6 +50,7 @@ fn trained_network_is_nearly_rotation_equivariant() {
             m,
             &topology,
             &bundle.networks[0],
+            bundle.manifest.networks[0].residual,
             bundle.voxel_params(),
             bundle.output_for_mu_g(0.35),
             128,

@@ -66,9 +66,24 @@ pub struct SampleSource {
     a_p: Vec<f64>,
     category: Vec<u8>,
     category_faces: [Vec<u32>; NUM_CATEGORIES],
+    residual: bool,
 }
 
 impl SampleSource {
+    /// With `on`, [`Self::sample`] gives each target minus the face's
+    /// current normal (both in the local frame): the residual a network
+    /// with residual output learns (it predicts `target − input`).
+    pub fn with_residual(mut self, on: bool) -> SampleSource {
+        self.residual = on;
+        self
+    }
+
+    /// The current (noisy) normal of face `f` in `frame`.
+    pub fn local_input(&self, frame: &Frame, f: usize) -> [f32; 3] {
+        let l = frame.to_local(self.voxelizer.geometry().normals[f]);
+        [l[0] as f32, l[1] as f32, l[2] as f32]
+    }
+
     /// Precomputes the topology, voxelizer, targets and categories of the
     /// pair (`noisy`, `clean`), which must share vertex count and faces.
     /// `mu_gs` must hold six values (usually [`MU_GS`]).
@@ -155,6 +170,7 @@ impl SampleSource {
             a_p,
             category,
             category_faces,
+            residual: false,
         })
     }
 
@@ -227,12 +243,20 @@ impl SampleSource {
         (self.local_targets(&frame, f), frame)
     }
 
-    /// The targets of face `f` in `frame` (flattened, see [`Self::sample`]).
+    /// The targets of face `f` in `frame` (flattened, see [`Self::sample`];
+    /// minus [`Self::local_input`] with [`Self::with_residual`]).
     pub fn local_targets(&self, frame: &Frame, f: usize) -> [f32; TARGET_LEN] {
+        let base = if self.residual {
+            self.local_input(frame, f)
+        } else {
+            [0.0; 3]
+        };
         let mut out = [0.0f32; TARGET_LEN];
         for (k, t) in self.world_targets(f).iter().enumerate() {
             let l = frame.to_local(*t);
-            out[3 * k..3 * k + 3].copy_from_slice(&[l[0] as f32, l[1] as f32, l[2] as f32]);
+            for a in 0..3 {
+                out[3 * k + a] = l[a] as f32 - base[a];
+            }
         }
         out
     }
