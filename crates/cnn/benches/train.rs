@@ -45,7 +45,11 @@ fn main() {
                 (steps * batch) as f64 / secs
             );
             for (phase, s) in t.profile_report() {
-                println!("  {phase:<28} {:>7.2} ms/step ({:.0} %)", s / steps as f64 * 1e3, s / secs * 100.0);
+                println!(
+                    "  {phase:<28} {:>7.2} ms/step ({:.0} %)",
+                    s / steps as f64 * 1e3,
+                    s / secs * 100.0
+                );
             }
         });
     }

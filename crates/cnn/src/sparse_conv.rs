@@ -48,7 +48,9 @@ impl FoldedConv {
                 match level {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: `Level::detect` found the features at run time.
-                    Level::Avx512 => unsafe { scatter_avx512::<$co>(self, occupied, n, out, m, relu) },
+                    Level::Avx512 => unsafe {
+                        scatter_avx512::<$co>(self, occupied, n, out, m, relu)
+                    },
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: as above.
                     Level::Avx2 => unsafe { scatter_avx2::<$co>(self, occupied, n, out, m, relu) },

@@ -29,9 +29,7 @@ fn bn_train_ref(xs: &mut [Vec<f64>], bn: &BatchNormWeights) {
 }
 
 fn relu(xs: &mut [Vec<f64>]) {
-    xs.iter_mut()
-        .flatten()
-        .for_each(|v| *v = v.max(0.0));
+    xs.iter_mut().flatten().for_each(|v| *v = v.max(0.0));
 }
 
 /// Outputs of a batch in training mode, literally, in f64.
@@ -40,7 +38,10 @@ fn reference_train(w: &NetWeights, grids: &[f32], batch: usize) -> Vec<Vec<f64>>
     let mut xs: Vec<Vec<f64>> = Vec::new();
     let mut n = 0;
     for b in 0..batch {
-        let x: Vec<f64> = grids[b * g..(b + 1) * g].iter().map(|&v| v as f64).collect();
+        let x: Vec<f64> = grids[b * g..(b + 1) * g]
+            .iter()
+            .map(|&v| v as f64)
+            .collect();
         let (y, m) = conv_ref(&x, 3, w.grid, &w.stem);
         xs.push(y);
         n = m;
@@ -61,7 +62,10 @@ fn reference_train(w: &NetWeights, grids: &[f32], batch: usize) -> Vec<Vec<f64>>
         }
         bn_train_ref(&mut ts, &bw.bn_a);
         relu(&mut ts);
-        let mut ys: Vec<Vec<f64>> = ts.iter().map(|t| conv_ref(t, co, m, &bw.conv_b).0).collect();
+        let mut ys: Vec<Vec<f64>> = ts
+            .iter()
+            .map(|t| conv_ref(t, co, m, &bw.conv_b).0)
+            .collect();
         bn_train_ref(&mut ys, &bw.bn_b);
         bn_train_ref(&mut ss, &bw.bn_shortcut);
         for (y, s) in ys.iter_mut().zip(&ss) {
@@ -95,7 +99,12 @@ fn reference_train(w: &NetWeights, grids: &[f32], batch: usize) -> Vec<Vec<f64>>
         vs = hs;
     }
     vs.iter()
-        .map(|v| linear_ref(v, &w.output).into_iter().map(f64::tanh).collect())
+        .map(|v| {
+            linear_ref(v, &w.output)
+                .into_iter()
+                .map(f64::tanh)
+                .collect()
+        })
         .collect()
 }
 
@@ -153,8 +162,15 @@ fn case(seed: u64, grid: usize, channels: [usize; 3], batch: usize) -> Case {
         .flat_map(|i| common::sheet_grid(seed * 10 + i as u64, grid))
         .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed + 5);
-    let targets = (0..batch * 18).map(|_| rng.random_range(-0.9..0.9)).collect();
-    Case { w, grids, targets, batch }
+    let targets = (0..batch * 18)
+        .map(|_| rng.random_range(-0.9..0.9))
+        .collect();
+    Case {
+        w,
+        grids,
+        targets,
+        batch,
+    }
 }
 
 fn gradient_check(loss: Loss) {
@@ -162,9 +178,14 @@ fn gradient_check(loss: Loss) {
     let mut trainer = Trainer::new(&c.w).unwrap();
     let fast = trainer.loss(&c.grids, &c.targets, loss).unwrap();
     let slow = reference_loss(&c.w, &c.grids, &c.targets, c.batch, loss);
-    assert!((fast - slow).abs() < 1e-5 * slow.abs().max(1.0), "loss {fast} vs reference {slow}");
+    assert!(
+        (fast - slow).abs() < 1e-5 * slow.abs().max(1.0),
+        "loss {fast} vs reference {slow}"
+    );
     trainer.zero_grad();
-    trainer.forward_backward(&c.grids, &c.targets, loss).unwrap();
+    trainer
+        .forward_backward(&c.grids, &c.targets, loss)
+        .unwrap();
     let mut grads = trainer.gradients();
     let mut w = c.w.clone();
     let mut rng = ChaCha8Rng::seed_from_u64(11);
@@ -188,7 +209,8 @@ fn gradient_check(loss: Loss) {
             den += 1.0;
             diff += (fd - analytic[j] as f64).abs();
         }
-        let scale = grad_values[a].iter().map(|v| v.abs() as f64).sum::<f64>() / analytic.len() as f64;
+        let scale =
+            grad_values[a].iter().map(|v| v.abs() as f64).sum::<f64>() / analytic.len() as f64;
         // gradients that are zero in exact arithmetic (a bias before batch norm)
         // compare against an absolute floor
         let rel = diff / den / scale.max(1e-5);
@@ -214,7 +236,10 @@ fn gradients_equal_finite_differences_l1() {
 fn a_step_does_not_depend_on_the_thread_count() {
     let c = case(3, 15, [8, 16, 32], 19);
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| {
             let mut t = Trainer::new(&c.w).unwrap();
             let l = t.train_step(&c.grids, &c.targets, Loss::Mse, 1e-3).unwrap();
@@ -224,7 +249,10 @@ fn a_step_does_not_depend_on_the_thread_count() {
     let (l1, w1) = run(1);
     let (l3, w3) = run(3);
     assert_eq!(l1, l3);
-    assert!(w1 == w3, "weights after one step differ between 1 and 3 threads");
+    assert!(
+        w1 == w3,
+        "weights after one step differ between 1 and 3 threads"
+    );
 }
 
 #[test]
@@ -253,8 +281,14 @@ fn weights_round_trip_and_bad_batches_are_refused() {
     let t = Trainer::new(&c.w).unwrap();
     assert!(t.weights() == c.w);
     let mut t = t;
-    assert!(t.forward_backward(&c.grids[..100], &c.targets, Loss::Mse).is_err());
-    assert!(t.forward_backward(&c.grids, &c.targets[..5], Loss::Mse).is_err());
+    assert!(
+        t.forward_backward(&c.grids[..100], &c.targets, Loss::Mse)
+            .is_err()
+    );
+    assert!(
+        t.forward_backward(&c.grids, &c.targets[..5], Loss::Mse)
+            .is_err()
+    );
     let mut biased = c.w.clone();
     biased.stem.bias = Some(vec![0.0; 8]);
     assert!(Trainer::new(&biased).is_err());

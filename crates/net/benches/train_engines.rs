@@ -54,24 +54,38 @@ fn main() {
     });
     println!("lite training, batch 80, {threads} threads (samples/s):");
     println!("  normalnet-cnn Trainer  {ours:8.1}");
-    println!("  burn Flex autodiff     {burn:8.1}   (ours / burn = {:.1}×)", ours / burn);
+    println!(
+        "  burn Flex autodiff     {burn:8.1}   (ours / burn = {:.1}×)",
+        ours / burn
+    );
     if let Ok(python) = std::env::var("TORCH_PYTHON") {
-        let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/tools/torch_bench/bench.py");
+        let script = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/tools/torch_bench/bench.py"
+        );
         let out = std::process::Command::new(python)
             .env_remove("OPENBLAS_CORETYPE")
             .env_remove("OPENBLAS_L2_SIZE")
-            .args([script, "--preset", "lite", "--mode", "train", "--batch", "80"])
+            .args([
+                script, "--preset", "lite", "--mode", "train", "--batch", "80",
+            ])
             .args(["--threads", &threads.to_string(), "--reps", "5"])
             .output();
         match out {
             Ok(o) if o.status.success() => {
                 let text = String::from_utf8_lossy(&o.stdout);
-                let torch = text
-                    .split("\"samples_per_s\":")
-                    .nth(1)
-                    .and_then(|s| s.trim().trim_end_matches(['}', '\n']).trim().parse::<f64>().ok());
+                let torch = text.split("\"samples_per_s\":").nth(1).and_then(|s| {
+                    s.trim()
+                        .trim_end_matches(['}', '\n'])
+                        .trim()
+                        .parse::<f64>()
+                        .ok()
+                });
                 match torch {
-                    Some(t) => println!("  PyTorch CPU f32        {t:8.1}   (ours / PyTorch = {:.2}×)", ours / t),
+                    Some(t) => println!(
+                        "  PyTorch CPU f32        {t:8.1}   (ours / PyTorch = {:.2}×)",
+                        ours / t
+                    ),
                     None => println!("  PyTorch: could not read {text}"),
                 }
             }

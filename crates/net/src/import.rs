@@ -34,10 +34,20 @@ impl ModuleMapper for Setter {
         match self.tensors.remove(&path) {
             Some(values) if values.len() == dims.iter().product::<usize>() => {
                 let t = Tensor::from_data(TensorData::new(values, dims), &self.device);
-                Param::initialized(id, if tensor.is_require_grad() { t.require_grad() } else { t })
+                Param::initialized(
+                    id,
+                    if tensor.is_require_grad() {
+                        t.require_grad()
+                    } else {
+                        t
+                    },
+                )
             }
             Some(values) => {
-                self.failed = Some(format!("{path}: {} values for shape {dims:?}", values.len()));
+                self.failed = Some(format!(
+                    "{path}: {} values for shape {dims:?}",
+                    values.len()
+                ));
                 Param::initialized(id, tensor)
             }
             None => {

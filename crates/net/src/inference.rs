@@ -340,6 +340,57 @@ mod tests {
         assert!(mean < 0.05, "mean change {mean}°");
     }
 
+    /// A residual network whose output layer is zero predicts "no change":
+    /// every filtered normal is the face's current normal; the same network
+    /// read as a direct predictor gives no direction at all (fallback).
+    #[test]
+    fn a_zero_residual_is_the_identity() {
+        let config = ModelConfig::tiny();
+        let mut w = crate::export::net_weights(&config.init(&Device::flex(), 4), &config).unwrap();
+        w.output.weight.fill(0.0);
+        w.output.bias.as_mut().unwrap().fill(0.0);
+        let net = crate::import::normal_net(&config, &w, &Device::flex()).unwrap();
+        let mesh = shape();
+        let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+        let (got, _) = filtered_normals(
+            &mesh,
+            &topology,
+            &net,
+            true,
+            VoxelParams::tiny(),
+            2,
+            64,
+            &Device::flex(),
+            None,
+            &NoProgress,
+        )
+        .unwrap();
+        let current = face_normals(&mesh);
+        let err = angles_deg(&got, &current);
+        assert!(
+            err.iter().all(|&e| e < 1e-4),
+            "max {:?}",
+            err.iter().cloned().fold(0.0, f64::max)
+        );
+        // a non-zero residual moves the normals
+        w.output.bias.as_mut().unwrap().fill(0.2);
+        let net = crate::import::normal_net(&config, &w, &Device::flex()).unwrap();
+        let (moved, _) = filtered_normals(
+            &mesh,
+            &topology,
+            &net,
+            true,
+            VoxelParams::tiny(),
+            2,
+            64,
+            &Device::flex(),
+            None,
+            &NoProgress,
+        )
+        .unwrap();
+        assert!(angles_deg(&moved, &current).iter().any(|&e| e > 5.0));
+    }
+
     const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
     /// The frame aligns the 2-ring mean normal with y and leaves the yaw

@@ -38,13 +38,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::NetError;
 use crate::bundle::{
-    INTERVALS, MANIFEST, Manifest, NetworkInfo, load_network, new_manifest,
-    write_atomically,
+    INTERVALS, MANIFEST, Manifest, NetworkInfo, load_network, new_manifest, write_atomically,
 };
 use crate::data::SampleBatch;
 use crate::inference::filtered_normals;
-use crate::model::{MU_GS, ModelConfig, NUM_OUTPUTS, NormalNet};
 use crate::learner::{Engine, Learner};
+use crate::model::{MU_GS, ModelConfig, NUM_OUTPUTS, NormalNet};
 use normalnet_cnn::Loss;
 
 /// Output slot of μ_g 0.35, the one validated (SPEC §8).
@@ -197,7 +196,9 @@ impl TrainConfig {
         }
         let engine = Engine::parse(&self.engine)
             .ok_or_else(|| bad(format!("engine = {:?}: expected cnn or burn", self.engine)))?;
-        let loss = self.loss_fn().ok_or_else(|| bad(format!("loss = {:?}: expected mse or l1", self.loss)))?;
+        let loss = self
+            .loss_fn()
+            .ok_or_else(|| bad(format!("loss = {:?}: expected mse or l1", self.loss)))?;
         if engine == Engine::Burn && loss != Loss::Mse {
             return Err(bad("the burn engine trains with loss = \"mse\" only".into()));
         }
@@ -778,8 +779,16 @@ fn validation_error(cnn: &normalnet_cnn::Cnn, val: &ValidationSet) -> f64 {
         let o = &out[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
         let t = &val.batch.targets[i * NUM_OUTPUTS + 3 * VALIDATION_SLOT..][..3];
         let base = val.inputs.as_ref().map_or([0.0; 3], |v| v[i]);
-        let o = [(o[0] + base[0]) as f64, (o[1] + base[1]) as f64, (o[2] + base[2]) as f64];
-        let t = [(t[0] + base[0]) as f64, (t[1] + base[1]) as f64, (t[2] + base[2]) as f64];
+        let o = [
+            (o[0] + base[0]) as f64,
+            (o[1] + base[1]) as f64,
+            (o[2] + base[2]) as f64,
+        ];
+        let t = [
+            (t[0] + base[0]) as f64,
+            (t[1] + base[1]) as f64,
+            (t[2] + base[2]) as f64,
+        ];
         sum += if vec3::norm(o) == 0.0 || !vec3::norm(o).is_finite() {
             90.0
         } else {

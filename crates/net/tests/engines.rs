@@ -45,7 +45,10 @@ impl ModuleVisitor for Grads<'_> {
 fn burn_gradients(net: &NormalNet, b: &SampleBatch) -> (f64, HashMap<String, Vec<f32>>) {
     let device = Device::flex().autodiff();
     let model = net.clone().fork(&device).train();
-    let loss = mse(model.forward(b.grids_tensor(&device)), b.targets_tensor(&device));
+    let loss = mse(
+        model.forward(b.grids_tensor(&device)),
+        b.targets_tensor(&device),
+    );
     let value = loss.clone().into_scalar::<f32>() as f64;
     let grads = GradientsParams::from_grads(loss.backward(), &model);
     let mut v = Grads {
@@ -79,7 +82,10 @@ fn gradients_equal_burn_autodiff() {
     );
     let ours = tensors_by_path(&trainer.gradients());
     // every parameter that burn differentiates (all but running statistics)
-    assert_eq!(burn.len(), 3 + 3 * (1 + 2 + 1 + 2 + 1 + 2) + 3 * (2 + 2) + 2);
+    assert_eq!(
+        burn.len(),
+        3 + 3 * (1 + 2 + 1 + 2 + 1 + 2) + 3 * (2 + 2) + 2
+    );
     let total = burn.values().map(|g| norm(g).powi(2)).sum::<f64>().sqrt();
     let mut worst = (0.0f64, String::new());
     for (path, g) in &burn {
@@ -98,7 +104,10 @@ fn gradients_equal_burn_autodiff() {
             worst = (rel, path.clone());
         }
     }
-    eprintln!("largest relative gradient difference: {:.2e} ({})", worst.0, worst.1);
+    eprintln!(
+        "largest relative gradient difference: {:.2e} ({})",
+        worst.0, worst.1
+    );
 }
 
 #[test]
@@ -119,12 +128,19 @@ fn both_engines_follow_the_same_loss_curve() {
         let (m, l) = train_step(model, &mut optim, b, lr, &device);
         model = m;
         burn_curve.push(l);
-        our_curve.push(trainer.train_step(&b.grids, &b.targets, Loss::Mse, lr).unwrap());
+        our_curve.push(
+            trainer
+                .train_step(&b.grids, &b.targets, Loss::Mse, lr)
+                .unwrap(),
+        );
     }
     // both learn ...
     let head = |c: &[f64]| c[..4].iter().sum::<f64>() / 4.0;
     let tail = |c: &[f64]| c[steps - 4..].iter().sum::<f64>() / 4.0;
-    assert!(tail(&burn_curve) < 0.7 * head(&burn_curve), "{burn_curve:?}");
+    assert!(
+        tail(&burn_curve) < 0.7 * head(&burn_curve),
+        "{burn_curve:?}"
+    );
     assert!(tail(&our_curve) < 0.7 * head(&our_curve), "{our_curve:?}");
     // ... and stay on the same curve: step 0 is the same computation; after
     // that Adam turns rounding-level differences of near-zero gradients into

@@ -133,3 +133,34 @@ fn mismatched_pairs_and_bad_mu_are_rejected() {
     let err = SampleSource::new(a.clone(), &a, VoxelParams::tiny(), &[0.0; 6]).unwrap_err();
     assert!(err.to_string().contains("mu_gs"), "{err}");
 }
+
+/// Residual targets are the plain targets minus the face's input normal,
+/// in the same local frame; the input normal is a unit vector there.
+#[test]
+fn residual_targets_are_targets_minus_the_input_normal() {
+    let clean = grid_cube(6);
+    let noisy = noisy_copy(&clean, 0.2, 3);
+    let plain = SampleSource::new(noisy.clone(), &clean, VoxelParams::tiny(), &MU_GS).unwrap();
+    let residual = SampleSource::new(noisy.clone(), &clean, VoxelParams::tiny(), &MU_GS)
+        .unwrap()
+        .with_residual(true);
+    let grid_len = VoxelParams::tiny().grid_len();
+    let (mut g1, mut g2) = (vec![0.0f32; grid_len], vec![0.0f32; grid_len]);
+    let nn = face_normals(&noisy);
+    for f in [0, 7, 40] {
+        let mut s = normalnet_voxel::Scratch::new();
+        let (t, frame) = plain.sample_with(&mut s, f, 0.7, &mut g1);
+        let (r, _) = residual.sample_with(&mut s, f, 0.7, &mut g2);
+        assert_eq!(g1, g2);
+        let input = residual.local_input(&frame, f);
+        let back = frame.to_world([input[0] as f64, input[1] as f64, input[2] as f64]);
+        assert!(vec3::dist2(back, nn[f]) < 1e-10);
+        for k in 0..18 {
+            assert!(
+                (t[k] - (r[k] + input[k % 3])).abs() < 1e-6,
+                "face {f} value {k}"
+            );
+        }
+        assert!(r.iter().any(|v| v.abs() > 1e-4));
+    }
+}

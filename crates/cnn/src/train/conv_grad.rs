@@ -87,7 +87,10 @@ pub(crate) fn input_grad(
     let ax = axis_pairs(n, m, sh);
     macro_rules! go {
         ($ci:literal, $s:literal) => {
-            dispatch!(level, input_grad_kernel::<$ci, $s>(sh, wt, dz, n, m, dx, accumulate, &ax))
+            dispatch!(
+                level,
+                input_grad_kernel::<$ci, $s>(sh, wt, dz, n, m, dx, accumulate, &ax)
+            )
         };
     }
     match sh.cin {
@@ -151,7 +154,8 @@ fn input_grad_kernel<const CI: usize, const S: usize, F: MulAdd>(
                     }
                 }
                 let i = (id * n + ih) * n + iw;
-                let dst: &mut [f32; CI] = (&mut dx[i * CI..i * CI + CI]).try_into().expect("dx row");
+                let dst: &mut [f32; CI] =
+                    (&mut dx[i * CI..i * CI + CI]).try_into().expect("dx row");
                 let mut acc = if accumulate { *dst } else { [0.0; CI] };
                 for a in &accs {
                     for j in 0..CI {
@@ -274,7 +278,10 @@ pub(crate) fn stem_weight_grad(
     debug_assert_eq!(sh.stride, 1);
     macro_rules! go {
         ($co:literal) => {
-            dispatch!(level, stem_weight_grad_kernel::<$co>(sh, occupied, n, dz, dw))
+            dispatch!(
+                level,
+                stem_weight_grad_kernel::<$co>(sh, occupied, n, dz, dw)
+            )
         };
     }
     match sh.cout {
@@ -383,8 +390,20 @@ mod tests {
 
     #[test]
     fn tap_ranges_match_brute_force() {
-        for (k, s, p, n) in [(3, 2, 1, 21), (3, 1, 1, 11), (1, 2, 0, 21), (5, 1, 2, 9), (3, 2, 1, 6)] {
-            let sh = ConvShape { k, stride: s, pad: p, cin: 1, cout: 1 };
+        for (k, s, p, n) in [
+            (3, 2, 1, 21),
+            (3, 1, 1, 11),
+            (1, 2, 0, 21),
+            (5, 1, 2, 9),
+            (3, 2, 1, 6),
+        ] {
+            let sh = ConvShape {
+                k,
+                stride: s,
+                pad: p,
+                cin: 1,
+                cout: 1,
+            };
             let m = sh.output_side(n);
             for kk in 0..k {
                 let brute: Vec<usize> = (0..m)
@@ -412,28 +431,64 @@ mod speed {
     #[ignore]
     fn kernel_speed() {
         let lv = Level::detect();
-        for (n, k, s, p, ci, co) in [(11, 3, 1, 1, 16, 16), (21, 3, 2, 1, 16, 16), (11, 3, 2, 1, 16, 32), (6, 3, 1, 1, 32, 32)] {
-            let sh = ConvShape { k, stride: s, pad: p, cin: ci, cout: co };
+        for (n, k, s, p, ci, co) in [
+            (11, 3, 1, 1, 16, 16),
+            (21, 3, 2, 1, 16, 16),
+            (11, 3, 2, 1, 16, 32),
+            (6, 3, 1, 1, 32, 32),
+        ] {
+            let sh = ConvShape {
+                k,
+                stride: s,
+                pad: p,
+                cin: ci,
+                cout: co,
+            };
             let m = sh.output_side(n);
-            let x: Vec<f32> = (0..n * n * n * ci).map(|i| ((i * 7919) % 13) as f32 * 0.1 - 0.5).collect();
-            let dz: Vec<f32> = (0..m * m * m * co).map(|i| ((i * 104729) % 17) as f32 * 0.1 - 0.8).collect();
-            let w: Vec<f32> = (0..k * k * k * ci * co).map(|i| ((i * 31) % 11) as f32 * 0.01).collect();
-            let f = FoldedConv { w: w.clone(), b: vec![0.0; co], cin: ci, cout: co, k, stride: s, pad: p };
+            let x: Vec<f32> = (0..n * n * n * ci)
+                .map(|i| ((i * 7919) % 13) as f32 * 0.1 - 0.5)
+                .collect();
+            let dz: Vec<f32> = (0..m * m * m * co)
+                .map(|i| ((i * 104729) % 17) as f32 * 0.1 - 0.8)
+                .collect();
+            let w: Vec<f32> = (0..k * k * k * ci * co)
+                .map(|i| ((i * 31) % 11) as f32 * 0.01)
+                .collect();
+            let f = FoldedConv {
+                w: w.clone(),
+                b: vec![0.0; co],
+                cin: ci,
+                cout: co,
+                k,
+                stride: s,
+                pad: p,
+            };
             let mut out = vec![0.0; m * m * m * co];
             let mut dx = vec![0.0; n * n * n * ci];
             let mut dw = vec![0.0; w.len()];
             let macs = (m * m * m * k * k * k * ci * co) as f64;
             let reps = 50;
             let t = std::time::Instant::now();
-            for _ in 0..reps { f.run(lv, &x, n, &mut out, false, false, None); }
+            for _ in 0..reps {
+                f.run(lv, &x, n, &mut out, false, false, None);
+            }
             let fwd = t.elapsed().as_secs_f64() / reps as f64;
             let t = std::time::Instant::now();
-            for _ in 0..reps { input_grad(lv, &sh, &w, &dz, n, &mut dx, false); }
+            for _ in 0..reps {
+                input_grad(lv, &sh, &w, &dz, n, &mut dx, false);
+            }
             let dxt = t.elapsed().as_secs_f64() / reps as f64;
             let t = std::time::Instant::now();
-            for _ in 0..reps { weight_grad(lv, &sh, &x, &dz, n, &mut dw); }
+            for _ in 0..reps {
+                weight_grad(lv, &sh, &x, &dz, n, &mut dw);
+            }
             let dwt = t.elapsed().as_secs_f64() / reps as f64;
-            println!("n {n} s {s} {ci}->{co}: fwd {:.1} dx {:.1} dw {:.1} GFLOP/s", 2.0 * macs / fwd / 1e9, 2.0 * macs / dxt / 1e9, 2.0 * macs / dwt / 1e9);
+            println!(
+                "n {n} s {s} {ci}->{co}: fwd {:.1} dx {:.1} dw {:.1} GFLOP/s",
+                2.0 * macs / fwd / 1e9,
+                2.0 * macs / dxt / 1e9,
+                2.0 * macs / dwt / 1e9
+            );
         }
     }
 }

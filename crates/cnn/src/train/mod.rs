@@ -209,11 +209,7 @@ impl Linear {
         l.check(layer)?;
         Ok(Linear {
             w: Param::new(l.weight.clone()),
-            b: Param::new(
-                l.bias
-                    .clone()
-                    .unwrap_or_else(|| vec![0.0; l.out_features]),
-            ),
+            b: Param::new(l.bias.clone().unwrap_or_else(|| vec![0.0; l.out_features])),
             nin: l.in_features,
             nout: l.out_features,
         })
@@ -441,7 +437,12 @@ impl Trainer {
             .hidden
             .iter()
             .enumerate()
-            .map(|(i, (l, bn))| Ok((Linear::new(l, &format!("hidden {}", i + 1))?, BatchNorm::new(bn))))
+            .map(|(i, (l, bn))| {
+                Ok((
+                    Linear::new(l, &format!("hidden {}", i + 1))?,
+                    BatchNorm::new(bn),
+                ))
+            })
             .collect::<Result<Vec<_>, CnnError>>()?;
         Ok(Trainer {
             grid: weights.grid,
@@ -487,7 +488,13 @@ impl Trainer {
     }
 
     fn collect(&self, grad: bool) -> NetWeights {
-        let pick = |p: &Param| if grad { p.grad.clone() } else { p.value.clone() };
+        let pick = |p: &Param| {
+            if grad {
+                p.grad.clone()
+            } else {
+                p.value.clone()
+            }
+        };
         let bn = |b: &BatchNorm| {
             let mut w = b.weights();
             if grad {
@@ -581,11 +588,13 @@ impl Trainer {
         out.extend_from_slice(&self.t.to_le_bytes());
         for p in self.params_mut() {
             for a in [&p.value, &p.m, &p.v] {
-                a.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+                a.iter()
+                    .for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
             }
         }
         for r in self.running_mut() {
-            r.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+            r.iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
         }
         out
     }
@@ -596,7 +605,11 @@ impl Trainer {
     /// # Errors
     /// [`CnnError::BufferSize`] when `bytes` is not such a state.
     pub fn load_state_bytes(&mut self, bytes: &[u8]) -> Result<(), CnnError> {
-        let floats: usize = self.params_mut().iter().map(|p| 3 * p.value.len()).sum::<usize>()
+        let floats: usize = self
+            .params_mut()
+            .iter()
+            .map(|p| 3 * p.value.len())
+            .sum::<usize>()
             + self.running_mut().iter().map(|r| r.len()).sum::<usize>();
         let expected = STATE_MAGIC.len() + 4 + 4 * floats;
         if bytes.len() != expected || !bytes.starts_with(STATE_MAGIC) {
@@ -810,7 +823,10 @@ impl Trainer {
         }
         // global max pool
         let last = c.blocks.last().map_or(&c.a0, |b| &b.out);
-        let ch = self.blocks.last().map_or(self.stem.sh.cout, |b| b.a.sh.cout);
+        let ch = self
+            .blocks
+            .last()
+            .map_or(self.stem.sh.cout, |b| b.a.sh.cout);
         let per = last.len() / samples;
         c.pooled.resize(samples * ch, 0.0);
         c.argmax.resize(samples * ch, 0);
@@ -915,10 +931,15 @@ impl Trainer {
         for bi in (0..self.blocks.len()).rev() {
             let bc = &c.blocks[bi];
             let b = &mut self.blocks[bi];
-            let x: &[f32] = if bi == 0 { &c.a0 } else { &c.blocks[bi - 1].out };
+            let x: &[f32] = if bi == 0 {
+                &c.a0
+            } else {
+                &c.blocks[bi - 1].out
+            };
             relu_mask(&mut d_out, &bc.out);
             let mut d_zs = d_out.clone();
-            b.bn_b.backward(&bc.st_b, &bc.zb, &mut d_out, samples, false);
+            b.bn_b
+                .backward(&bc.st_b, &bc.zb, &mut d_out, samples, false);
             b.bn_s.backward(&bc.st_s, &bc.zs, &mut d_zs, samples, false);
             let mut d_aa = vec![0.0f32; bc.aa.len()];
             b.b.backward(lv, &bc.aa, b.m, &d_out, samples, Some(&mut d_aa), false);
@@ -930,7 +951,8 @@ impl Trainer {
             self.prof.lap(|| format!("block {} backward", bi + 1));
         }
         // stem: weight gradient scattered from the occupied cubes
-        self.stem_bn.backward(&c.st0, &c.z0, &mut d_out, samples, true);
+        self.stem_bn
+            .backward(&c.st0, &c.z0, &mut d_out, samples, true);
         dz.clear();
         let per = d_out.len() / samples;
         let (sh, grid, len) = (self.stem.sh, self.grid, self.stem.p.value.len());
