@@ -37,7 +37,9 @@ impl Engine {
     }
 }
 
-/// A network being trained and its optimiser state.
+/// A network being trained and its optimiser state (one learner per
+/// network, so the variants' size difference does not matter).
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Learner {
     Cnn {
         trainer: Box<Trainer>,

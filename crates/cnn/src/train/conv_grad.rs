@@ -172,7 +172,7 @@ fn input_grad_kernel<const CI: usize, const S: usize, F: MulAdd>(
 /// vectors of accumulators, dividing `cin`.
 fn channel_block(cin: usize, cout: usize) -> usize {
     let mut cb = (64 / cout).clamp(1, 16);
-    while cin % cb != 0 {
+    while !cin.is_multiple_of(cb) {
         cb /= 2;
     }
     cb

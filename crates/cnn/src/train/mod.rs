@@ -690,7 +690,7 @@ impl Trainer {
     fn check_batch(&self, grids: &[f32], targets: &[f32]) -> Result<usize, CnnError> {
         let g = self.grid_len();
         let samples = grids.len() / g;
-        if grids.is_empty() || grids.len() % g != 0 {
+        if grids.is_empty() || !grids.len().is_multiple_of(g) {
             return Err(CnnError::BufferSize {
                 what: "grid batch",
                 actual: grids.len(),
