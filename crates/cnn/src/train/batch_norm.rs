@@ -170,14 +170,24 @@ impl BatchNorm {
     ) {
         let c = self.channels();
         let count = (z.len() / c) as f64;
-        let live = |j: usize, zv: f32| !relu || zv * st.scale[j] + st.shift[j] > 0.0;
-        // Σ g and Σ g·(z − mean), masked
+        let per = z.len() / samples;
+        if relu {
+            // the ReLU's backward pass, its mask recomputed from z
+            g.par_chunks_mut(per)
+                .zip(z.par_chunks(per))
+                .for_each(|(gs, zs)| {
+                    for (gr, zr) in gs.chunks_exact_mut(c).zip(zs.chunks_exact(c)) {
+                        for j in 0..c {
+                            if zr[j] * st.scale[j] + st.shift[j] <= 0.0 {
+                                gr[j] = 0.0;
+                            }
+                        }
+                    }
+                });
+        }
+        // Σ g and Σ g·(z − mean): plain loops (they vectorise)
         let (sum_g, mut sum_gx) = channel_sums2(g, Some(z), samples, c, |j, gv, zv| {
-            if live(j, zv) {
-                (gv, gv * (zv - st.mean[j]))
-            } else {
-                (0.0, 0.0)
-            }
+            (gv, gv * (zv - st.mean[j]))
         });
         for j in 0..c {
             sum_gx[j] *= st.inv_std[j] as f64;
@@ -192,14 +202,12 @@ impl BatchNorm {
         let mx: Vec<f32> = (0..c)
             .map(|j| (sum_gx[j] / count) as f32 * st.inv_std[j])
             .collect();
-        let per = z.len() / samples;
         g.par_chunks_mut(per)
             .zip(z.par_chunks(per))
             .for_each(|(gs, zs)| {
                 for (gr, zr) in gs.chunks_exact_mut(c).zip(zs.chunks_exact(c)) {
                     for j in 0..c {
-                        let gv = if live(j, zr[j]) { gr[j] } else { 0.0 };
-                        gr[j] = a[j] * (gv - mg[j] - (zr[j] - st.mean[j]) * mx[j]);
+                        gr[j] = a[j] * (gr[j] - mg[j] - (zr[j] - st.mean[j]) * mx[j]);
                     }
                 }
             });
