@@ -349,24 +349,27 @@ mod tests {
         let mut w = crate::export::net_weights(&config.init(&Device::flex(), 4), &config).unwrap();
         w.output.weight.fill(0.0);
         w.output.bias.as_mut().unwrap().fill(0.0);
-        let net = crate::import::normal_net(&config, &w, &Device::flex()).unwrap();
         let mesh = shape();
         let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-        let (got, _) = filtered_normals(
-            &mesh,
-            &topology,
-            &net,
-            true,
-            VoxelParams::tiny(),
-            2,
-            64,
-            &Device::flex(),
-            None,
-            &NoProgress,
-        )
-        .unwrap();
+        let pass = |w: &normalnet_cnn::NetWeights| {
+            let net = crate::import::normal_net(&config, w, &Device::flex()).unwrap();
+            let (normals, _) = filtered_normals(
+                &mesh,
+                &topology,
+                &net,
+                true,
+                VoxelParams::tiny(),
+                2,
+                64,
+                &Device::flex(),
+                None,
+                &NoProgress,
+            )
+            .unwrap();
+            normals
+        };
         let current = face_normals(&mesh);
-        let err = angles_deg(&got, &current);
+        let err = angles_deg(&pass(&w), &current);
         assert!(
             err.iter().all(|&e| e < 1e-4),
             "max {:?}",
@@ -374,20 +377,7 @@ mod tests {
         );
         // a non-zero residual moves the normals
         w.output.bias.as_mut().unwrap().fill(0.2);
-        let net = crate::import::normal_net(&config, &w, &Device::flex()).unwrap();
-        let (moved, _) = filtered_normals(
-            &mesh,
-            &topology,
-            &net,
-            true,
-            VoxelParams::tiny(),
-            2,
-            64,
-            &Device::flex(),
-            None,
-            &NoProgress,
-        )
-        .unwrap();
+        let moved = pass(&w);
         assert!(angles_deg(&moved, &current).iter().any(|&e| e > 5.0));
     }
 
