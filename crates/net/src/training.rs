@@ -735,6 +735,7 @@ fn validation_set(
         })
         .collect::<Result<_, _>>()?;
     let mut inputs = Vec::new();
+    let mut scratch = normalnet_voxel::Scratch::new();
     let sampler = BalancedSampler::new(sources.iter());
     let items = sampler.draw_count_seeded(config.validation_faces, config.seed + 99 + k as u64);
     let mut batch = SampleBatch::with_capacity(voxel.side(), items.len());
@@ -745,7 +746,7 @@ fn validation_set(
         let start = batch.grids.len();
         batch.grids.resize(start + grid_len, 0.0);
         let (t, frame) = src.sample_with(
-            &mut normalnet_voxel::Scratch::new(),
+            &mut scratch,
             it.face as usize,
             0.0,
             &mut batch.grids[start..],
