@@ -130,6 +130,13 @@ pub struct TriangleBvh {
     tris: Vec<[Vec3; 3]>,
     /// original face index of each slot in `tris`
     ids: Vec<u32>,
+    /// Margin on box pruning, in squared length units: a point-triangle
+    /// distance computed in floating point can come out an ulp or so below
+    /// the (exactly computed) distance to the triangle's box, and pruning on
+    /// the bare box distance then missed the true minimum by one ulp.
+    /// `1e-12 × diagonal²` covers the rounding of `closest_point_on_triangle`
+    /// at a cost of a handful of extra node visits.
+    prune_slack: f64,
 }
 
 impl TriangleBvh {
@@ -222,8 +229,13 @@ impl TriangleBvh {
                 }
             }
         }
+        let prune_slack = nodes.first().map_or(0.0, |root| {
+            let d2 = vec3::dist2(root.lo, root.hi);
+            if d2.is_finite() { 1e-12 * d2 } else { 0.0 }
+        });
         TriangleBvh {
             nodes,
+            prune_slack,
             tris: items
                 .iter()
                 .map(|it| mesh.corners(it.id as usize))
@@ -273,7 +285,7 @@ impl TriangleBvh {
         while top > 0 {
             top -= 1;
             let (d, ni) = stack[top];
-            if d > best.dist2 {
+            if d > best.dist2 + self.prune_slack {
                 continue;
             }
             let node = self.nodes[ni as usize];
@@ -302,11 +314,11 @@ impl TriangleBvh {
                 } else {
                     ((dr, r), (dl, l))
                 };
-                if far.0 <= best.dist2 {
+                if far.0 <= best.dist2 + self.prune_slack {
                     stack[top] = far;
                     top += 1;
                 }
-                if near.0 <= best.dist2 {
+                if near.0 <= best.dist2 + self.prune_slack {
                     stack[top] = near;
                     top += 1;
                 }
