@@ -13,6 +13,7 @@ use std::sync::mpsc::sync_channel;
 use std::time::Instant;
 
 use burn::tensor::Device;
+use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_normals};
 use normalnet_filters::{VertexUpdateBuffers, vertex_update_in_place};
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
@@ -35,6 +36,12 @@ pub struct DenoiseParams {
     pub mu_g: f64,
     /// faces per network batch (default 256)
     pub batch: usize,
+    /// Guided form: the network's normals are the guidance of one
+    /// joint-bilateral pass over the current face normals (range width μ_g,
+    /// spatial 2·d_s, as GNF and the GT-guided targets), instead of being
+    /// the filtered normals themselves (the paper's form). With perfect
+    /// network outputs this is the oracle.
+    pub guided: bool,
 }
 
 impl Default for DenoiseParams {
@@ -44,6 +51,7 @@ impl Default for DenoiseParams {
             vertex_iterations: 20,
             mu_g: 0.35,
             batch: 256,
+            guided: false,
         }
     }
 }
@@ -136,6 +144,17 @@ pub fn denoise(
         )?;
         times.add(&t);
         let t = Instant::now();
+        let normals = if params.guided {
+            gt_guided_normals(
+                &current,
+                &topology,
+                &normals,
+                &[params.mu_g],
+                GT_GUIDED_SIGMA_S,
+            )
+        } else {
+            normals
+        };
         vertex_update_in_place(
             &mut positions,
             &mesh.faces,

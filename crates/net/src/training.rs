@@ -124,6 +124,10 @@ pub struct TrainConfig {
     /// `target − input normal` instead of the normal (see
     /// `NetworkInfo::residual`)
     pub residual_from: usize,
+    /// a bundle folder to continue from (empty = none): network k starts
+    /// from the bundle's network k (same preset and residual form), and
+    /// the manifest counts its samples and seconds on top of the bundle's
+    pub init_from: String,
 }
 
 impl Default for TrainConfig {
@@ -152,6 +156,7 @@ impl Default for TrainConfig {
             engine: "cnn".into(),
             loss: "mse".into(),
             residual_from: 0,
+            init_from: String::new(),
         }
     }
 }
@@ -389,6 +394,7 @@ pub fn train(
         _ => VoxelParams::lite(),
     };
     let plain = Device::flex();
+    let init = init_bundle(config)?;
     let mut pairs = make_pairs(config, &config.sources, config.seed, progress)?;
     let mut val_pairs = make_pairs(config, &config.validation, config.seed + 777, progress)?;
     let log_path = out.join("train_log.csv");
@@ -438,7 +444,14 @@ pub fn train(
         let ckpt_dir = out.join("checkpoint");
         let engine = Engine::parse(&config.engine).unwrap_or(Engine::Cnn);
         let loss_fn = config.loss_fn().unwrap_or_default();
-        let start_net = if config.warm_start && k > 0 {
+        let start_net = if let Some((dir, _)) = &init {
+            load_network(
+                &model_config,
+                &config.preset,
+                &dir.join(crate::bundle::network_file(k)),
+                &plain,
+            )?
+        } else if config.warm_start && k > 0 {
             load_network(
                 &model_config,
                 &config.preset,
@@ -450,7 +463,7 @@ pub fn train(
         };
         // a network that starts predicting residuals starts at the identity:
         // zero output layer (its own gradient is not zero, so it learns)
-        let start_net = if residual {
+        let start_net = if residual && init.is_none() {
             zero_output_layer(start_net, &model_config)?
         } else {
             start_net
@@ -550,14 +563,17 @@ pub fn train(
             &out.join(crate::bundle::network_file(k)),
             &plain,
         )?;
+        let (prior_samples, prior_seconds) = init.as_ref().map_or((0, 0.0), |(_, m)| {
+            (m.networks[k].samples_seen, m.networks[k].train_seconds)
+        });
         let info = NetworkInfo {
             file: crate::bundle::network_file(k),
             interval: Manifest::default_intervals()[k],
             steps: run.step,
-            samples_seen: run.step * config.batch,
+            samples_seen: prior_samples + run.step * config.batch,
             pool_faces,
             epochs: (run.step * config.batch) as f64 / pool_faces.max(1) as f64,
-            train_seconds: run.seconds,
+            train_seconds: prior_seconds + run.seconds,
             train_loss: mean(&run.loss_tail),
             validation_error_deg: run.best_val,
             validation_baseline_deg: baseline,
@@ -636,7 +652,11 @@ pub fn train(
             pairs.iter().filter(|p| p.regen).map(|p| p.name.as_str()).collect::<Vec<_>>().join("; ")
         ),
         notes: format!(
-            "steps per network {:?}, wall-clock limits {:?} s, warm start {}, validation = mean angle (deg) of the μ_g 0.35 output vs its target on {} balanced faces (yaw 0); last sample pool {} faces; total run {:.0} s",
+            "{}steps per network {:?}, wall-clock limits {:?} s, warm start {}, validation = mean angle (deg) of the μ_g 0.35 output vs its target on {} balanced faces (yaw 0); last sample pool {} faces; total run {:.0} s",
+            init.as_ref().map_or(String::new(), |(dir, _)| format!(
+                "continued from the bundle {} (samples and seconds include its training); ",
+                dir.display()
+            )),
             config.steps, config.max_seconds, config.warm_start, config.validation_faces, total_pool,
             run_start.elapsed().as_secs_f64()
         ),
@@ -644,6 +664,46 @@ pub fn train(
     manifest.write(&out.join(MANIFEST))?;
     crate::plot::loss_curve_png(&log_path, &out.join("loss.png"))?;
     Ok(manifest)
+}
+
+/// The bundle `init_from` names, checked against the run: same preset, the
+/// same residual form per network, six networks.
+fn init_bundle(config: &TrainConfig) -> Result<Option<(PathBuf, Manifest)>, NetError> {
+    if config.init_from.is_empty() {
+        return Ok(None);
+    }
+    let dir = PathBuf::from(&config.init_from);
+    let path = dir.join(MANIFEST);
+    let manifest = Manifest::read(&path)?;
+    let bad = |message: String| NetError::BadConfig {
+        path: path.clone(),
+        message,
+    };
+    if manifest.preset != config.preset {
+        return Err(bad(format!(
+            "init_from: the bundle is preset {:?}, the run {:?}",
+            manifest.preset, config.preset
+        )));
+    }
+    if manifest.networks.len() != INTERVALS.len() {
+        return Err(bad(format!(
+            "init_from: the bundle has {} networks, expected {}",
+            manifest.networks.len(),
+            INTERVALS.len()
+        )));
+    }
+    for (k, n) in manifest.networks.iter().enumerate() {
+        if n.residual != config.residual(k) {
+            return Err(bad(format!(
+                "init_from: network {} of the bundle has residual = {}, the run's residual_from = {} says {}",
+                k + 1,
+                n.residual,
+                config.residual_from,
+                config.residual(k)
+            )));
+        }
+    }
+    Ok(Some((dir, manifest)))
 }
 
 /// `net` with its output layer's weights and bias set to zero.

@@ -302,8 +302,9 @@ impl Settings {
                         )
                     }
                     "model" => options.model = Some(PathBuf::from(v.as_str().with_context(bad)?)),
+                    "guided" => options.guided = Some(v.as_bool().with_context(bad)?),
                     _ => bail!(
-                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model)"
+                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided)"
                     ),
                 }
             }
@@ -328,6 +329,9 @@ impl Settings {
         ];
         if let Some(m) = &options.model {
             parts.push(format!("model={}", m.display()));
+        }
+        if let Some(g) = options.guided {
+            parts.push(format!("guided={g}"));
         }
         Ok((options, parts.join(" ")))
     }

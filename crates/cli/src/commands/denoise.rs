@@ -234,6 +234,11 @@ pub struct Args {
     /// NormalNet model bundle folder (default: the shipped bundle).
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// NormalNet output form: `paper` (the network's normal is the filtered
+    /// normal) or `guided` (it guides a joint-bilateral pass over the
+    /// current normals, range width μ_g, spatial 2·d_s).
+    #[arg(long, value_enum)]
+    pub form: Option<NormalnetForm>,
     /// Ground-truth mesh: print error metrics of the result (required by gt-gnf).
     #[arg(long)]
     pub gt: Option<PathBuf>,
@@ -249,9 +254,18 @@ enum Chosen {
     GtGuided(GtGuidedGnfParams),
 }
 
+/// NormalNet's output form (`--form`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum NormalnetForm {
+    /// the network's normal is the filtered normal (the paper)
+    Paper,
+    /// the network's normal guides a joint-bilateral pass
+    Guided,
+}
+
 /// Rejects flags that the chosen method does not use.
 fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
-    let given: [(&str, bool); 17] = [
+    let given: [(&str, bool); 18] = [
         ("iterations", args.iterations.is_some()),
         ("vertex-iterations", args.vertex_iterations.is_some()),
         ("mu-g", args.mu_g.is_some()),
@@ -269,6 +283,7 @@ fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
         ("alpha0", args.alpha0.is_some()),
         ("alpha-decay", args.alpha_decay.is_some()),
         ("model", args.model.is_some()),
+        ("form", args.form.is_some()),
     ];
     for (flag, present) in given {
         if present && !used.contains(&flag) {
@@ -302,12 +317,16 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
     }
     let chosen = match args.method {
         MethodName::Normalnet => {
-            reject_unused(args, &["iterations", "vertex-iterations", "mu-g", "model"])?;
+            reject_unused(
+                args,
+                &["iterations", "vertex-iterations", "mu-g", "model", "form"],
+            )?;
             Chosen::Normalnet(NormalnetOptions {
                 model: args.model.clone(),
                 iterations: args.iterations,
                 vertex_iterations: args.vertex_iterations,
                 mu_g: args.mu_g,
+                guided: args.form.map(|f| f == NormalnetForm::Guided),
             })
         }
         MethodName::Gnf => {
