@@ -37,6 +37,15 @@ pub struct MeshReport {
     pub boundary_edges: usize,
     /// edges with more than two faces
     pub non_manifold_edges: usize,
+    /// vertices whose incident faces form more than one fan around them
+    /// (joined through edges at the vertex): "bow-tie" vertices, where two
+    /// sheets touch at a single point
+    pub non_manifold_vertices: usize,
+    /// edges with exactly two faces that traverse them in the same direction
+    /// (`a → b` twice): the two faces are oriented inconsistently
+    pub misoriented_edges: usize,
+    /// faces with at least one misoriented edge
+    pub misoriented_faces: usize,
     /// faces with zero normal (zero area or repeated vertex)
     pub degenerate_faces: usize,
     /// faces with a repeated vertex index (a subset of the degenerate ones)
@@ -68,6 +77,19 @@ impl MeshReport {
         );
         add(self.duplicate_faces, "duplicate faces", " (kept)");
         add(self.non_manifold_edges, "non-manifold edges", " (kept)");
+        add(
+            self.non_manifold_vertices,
+            "non-manifold (bow-tie) vertices",
+            " (kept)",
+        );
+        add(
+            self.misoriented_edges,
+            "edges traversed twice in the same direction",
+            &format!(
+                " ({} faces oriented inconsistently with a neighbour; kept, not flipped)",
+                self.misoriented_faces
+            ),
+        );
         add(
             self.unreferenced_vertices,
             "unreferenced vertices",
@@ -128,6 +150,15 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
         .filter(|&v| used[v as usize] && find(&mut parent, v) == v)
         .count();
 
+    let misoriented = misoriented_edges(&mesh.faces, topo);
+    let mut on_misoriented = vec![false; mesh.num_faces()];
+    for &e in &misoriented {
+        for f in topo.edge_faces[e] {
+            on_misoriented[f as usize] = true;
+        }
+    }
+    let misoriented_faces = on_misoriented.iter().filter(|m| **m).count();
+
     MeshReport {
         vertices: mesh.num_vertices(),
         faces: mesh.num_faces(),
@@ -140,6 +171,9 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
         area: geo.areas.iter().sum(),
         boundary_edges: topo.edge_face_count.iter().filter(|&&c| c == 1).count(),
         non_manifold_edges: topo.edge_face_count.iter().filter(|&&c| c > 2).count(),
+        non_manifold_vertices: non_manifold_vertices(&mesh.faces, topo).len(),
+        misoriented_edges: misoriented.len(),
+        misoriented_faces,
         degenerate_faces: geo
             .normals
             .iter()
@@ -155,6 +189,86 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
         components,
         euler_characteristic: referenced as i64 - topo.edges.len() as i64 + mesh.num_faces() as i64,
     }
+}
+
+/// Non-manifold ("bow-tie") vertices, increasing: vertices whose incident
+/// faces fall into more than one group when faces sharing an edge at the
+/// vertex are joined. A vertex on a boundary is manifold if its faces form a
+/// single fan; a vertex on a non-manifold edge is reported only if its faces
+/// also fall apart elsewhere (the edge itself is counted as a non-manifold
+/// edge). Unreferenced vertices are not reported.
+///
+/// `topo` must be the topology of `faces`. Time O(Σ deg(v) log deg(v)).
+pub fn non_manifold_vertices(faces: &[[u32; 3]], topo: &Topology) -> Vec<u32> {
+    use rayon::prelude::*;
+    (0..topo.num_vertices as u32)
+        .into_par_iter()
+        .map_init(Vec::new, |links: &mut Vec<(u32, u32)>, v| {
+            let incident = topo.vertex_faces.row(v as usize);
+            if incident.len() < 2 {
+                return None;
+            }
+            // (other end w of an edge v–w, local face index): faces with the
+            // same w share the edge v–w.
+            links.clear();
+            for (i, &f) in incident.iter().enumerate() {
+                let t = faces[f as usize];
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if a != b && (a == v || b == v) {
+                        links.push((if a == v { b } else { a }, i as u32));
+                    }
+                }
+            }
+            links.sort_unstable();
+            let mut parent: Vec<u32> = (0..incident.len() as u32).collect();
+            fn find(parent: &mut [u32], mut x: u32) -> u32 {
+                while parent[x as usize] != x {
+                    parent[x as usize] = parent[parent[x as usize] as usize];
+                    x = parent[x as usize];
+                }
+                x
+            }
+            let mut groups = incident.len();
+            for pair in links.windows(2) {
+                if pair[0].0 == pair[1].0 {
+                    let (a, b) = (find(&mut parent, pair[0].1), find(&mut parent, pair[1].1));
+                    if a != b {
+                        parent[b as usize] = a;
+                        groups -= 1;
+                    }
+                }
+            }
+            (groups > 1).then_some(v)
+        })
+        .flatten()
+        .collect()
+}
+
+/// Edges (indices into `topo.edges`) shared by exactly two faces that both
+/// traverse it in the same direction, i.e. whose orientations disagree.
+/// Edges of one face only (a degenerate face `[a, a, b]` has a–b twice), of
+/// more than two faces, or between a vertex and itself are not considered.
+///
+/// `topo` must be the topology of `faces`.
+pub fn misoriented_edges(faces: &[[u32; 3]], topo: &Topology) -> Vec<usize> {
+    // Direction of edge e in face f: true when f goes from edges[e][0] to edges[e][1].
+    let forward = |e: usize, f: u32| {
+        let t = faces[f as usize];
+        let k = topo.face_edges[f as usize]
+            .iter()
+            .position(|&x| x as usize == e)
+            .unwrap_or(0);
+        t[k] == topo.edges[e][0]
+    };
+    (0..topo.edges.len())
+        .filter(|&e| {
+            let [a, b] = topo.edges[e];
+            let [f, g] = topo.edge_faces[e];
+            // f == g: a degenerate face `[a, a, b]` has the edge a–b twice
+            a != b && f != g && topo.edge_face_count[e] == 2 && forward(e, f) == forward(e, g)
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -215,6 +329,92 @@ mod tests {
         assert_eq!(r.faces_with_repeated_vertex, 1);
         assert_eq!(r.unreferenced_vertices, 1);
         assert_eq!(r.components, 2);
-        assert_eq!(r.warnings().len(), 4);
+        // The degenerate face [0, 0, 3] meets the others only at vertices 0
+        // and 3 (its edge 0–3 is its own): two bow ties.
+        assert_eq!(r.non_manifold_vertices, 2);
+        assert_eq!(r.misoriented_edges, 0);
+        assert_eq!(r.warnings().len(), 5);
+    }
+
+    fn mesh(p: Vec<[f64; 3]>, f: Vec<[u32; 3]>) -> Mesh {
+        Mesh::new(p, f).unwrap()
+    }
+
+    #[test]
+    fn issue_14_bow_tie_vertices_are_reported() {
+        // Two triangles touching only at vertex 0 (a bow tie), and a fan of
+        // two triangles around vertex 5 (manifold, on a boundary).
+        let m = mesh(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [-1.0, 0.0, 0.0],
+                [-1.0, -1.0, 0.0],
+                [5.0, 0.0, 0.0],
+                [6.0, 0.0, 0.0],
+                [6.0, 1.0, 0.0],
+                [5.0, 1.0, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 3, 4], [5, 6, 7], [5, 7, 8]],
+        );
+        let topo = Topology::new(m.num_vertices(), &m.faces);
+        assert_eq!(non_manifold_vertices(&m.faces, &topo), vec![0]);
+        let r = validate(&m);
+        assert_eq!(r.non_manifold_vertices, 1);
+        assert_eq!(r.misoriented_edges, 0);
+        assert!(
+            r.warnings()
+                .iter()
+                .any(|w| w.contains("1 non-manifold (bow-tie) vertices")),
+            "{:?}",
+            r.warnings()
+        );
+        // Two cones glued at their apex: closed fans, still a bow tie.
+        let mut p = vec![[0.0, 0.0, 0.0]];
+        let mut f = Vec::new();
+        for (z, flip) in [(1.0, false), (-1.0, true)] {
+            let base = p.len() as u32;
+            for k in 0..4 {
+                let a = k as f64 * std::f64::consts::FRAC_PI_2;
+                p.push([a.cos(), a.sin(), z]);
+            }
+            for k in 0..4u32 {
+                let (b, c) = (base + k, base + (k + 1) % 4);
+                f.push(if flip { [0, c, b] } else { [0, b, c] });
+            }
+        }
+        let m = mesh(p, f);
+        let topo = Topology::new(m.num_vertices(), &m.faces);
+        assert_eq!(non_manifold_vertices(&m.faces, &topo), vec![0]);
+    }
+
+    #[test]
+    fn issue_14_inconsistent_orientation_is_reported() {
+        // A closed tetrahedron with one face flipped: its three edges are
+        // each traversed twice in the same direction.
+        let p = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let good = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let r = validate(&mesh(p.clone(), good.clone()));
+        assert_eq!((r.misoriented_edges, r.misoriented_faces), (0, 0));
+        assert_eq!(r.non_manifold_vertices, 0);
+        let mut bad = good;
+        bad[3] = [1, 3, 2];
+        let r = validate(&mesh(p, bad));
+        assert_eq!(r.misoriented_edges, 3);
+        assert_eq!(r.misoriented_faces, 4);
+        assert_eq!(r.non_manifold_vertices, 0);
+        assert!(
+            r.warnings()
+                .iter()
+                .any(|w| w.contains("3 edges traversed twice in the same direction")),
+            "{:?}",
+            r.warnings()
+        );
     }
 }

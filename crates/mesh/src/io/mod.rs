@@ -10,8 +10,13 @@
 //! - only STL, which has no shared vertices, merges bit-identical coincident
 //!   vertices (in order of first appearance);
 //! - any defect (truncated file, bad index, non-finite coordinate, wrong
-//!   element count, empty file) is a [`MeshError`] naming the file and the
-//!   line (text) or byte offset / element (binary); the readers never panic;
+//!   element count, empty file, a line that is no statement of the format)
+//!   is a [`MeshError`] naming the file and the line (text) or byte offset /
+//!   element (binary); the readers never panic;
+//! - text is read as it comes from any editor: a UTF-8 byte-order mark at the
+//!   start is skipped, lines may end in `\n`, `\r\n` or (old Mac) `\r`, and
+//!   keywords are matched case-insensitively where writers are known to vary
+//!   (OBJ `v`/`f`, the OFF header, every ASCII STL keyword);
 //! - writers print coordinates in the shortest decimal form that reads back
 //!   to the same `f64` (text formats), or the exact bits (binary PLY); STL is
 //!   f32 by definition. Output is written to a temporary file in the target
@@ -102,9 +107,11 @@ pub fn read_mesh_as(path: impl AsRef<Path>, format: Format) -> Result<Mesh, Mesh
 /// As [`read_mesh`].
 pub fn parse_mesh(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh, MeshError> {
     let (positions, faces) = match format {
-        Format::Obj => obj::parse(bytes, path)?,
-        Format::Off => off::parse(bytes, path)?,
-        Format::Ply => ply::parse(bytes, path)?,
+        Format::Obj => obj::parse(strip_bom(bytes), path)?,
+        Format::Off => off::parse(strip_bom(bytes), path)?,
+        Format::Ply => ply::parse(strip_bom(bytes), path)?,
+        // A binary STL header is 80 arbitrary bytes: the reader strips the
+        // mark only once it knows the file is text.
         Format::Stl => stl::parse(bytes, path)?,
     };
     finish(positions, faces, path)
@@ -171,8 +178,76 @@ pub fn encode_mesh(mesh: &Mesh, format: Format, options: &WriteOptions) -> Vec<u
     out
 }
 
+/// The folder [`write_atomically`] puts its temporary file in: the parent of
+/// `path`, or `.` for a bare file name.
+fn target_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Prefix of the temporary files of [`write_atomically`]:
+/// `.normalnet-<process id>-`, so that a process can find (and remove) its
+/// own leftovers after an interruption without touching another's.
+pub fn temp_prefix() -> String {
+    format!(".normalnet-{}-", std::process::id())
+}
+
+/// Checks, before any work, that [`write_atomically`] can write `path`: its
+/// folder exists and is a folder, a temporary file can be created in it
+/// (created and removed at once), and `path` itself is not a folder. The
+/// extension is not looked at (callers know which ones they write).
+///
+/// # Errors
+/// [`MeshError::Io`] naming `path` or its folder, with the reason.
+pub fn check_writable(path: &Path) -> Result<(), MeshError> {
+    let dir = target_dir(path);
+    let fail = |p: &Path, kind: std::io::ErrorKind, why: String| MeshError::Io {
+        path: p.to_path_buf(),
+        source: std::io::Error::new(kind, why),
+    };
+    match std::fs::metadata(&dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => {
+            return Err(fail(
+                &dir,
+                std::io::ErrorKind::NotADirectory,
+                "not a folder, cannot write into it".into(),
+            ));
+        }
+        Err(e) => {
+            return Err(fail(
+                &dir,
+                e.kind(),
+                format!("output folder cannot be used ({e})"),
+            ));
+        }
+    }
+    if path.is_dir() {
+        return Err(fail(
+            path,
+            std::io::ErrorKind::IsADirectory,
+            "is a folder, expected a file name".into(),
+        ));
+    }
+    tempfile::Builder::new()
+        .prefix(&temp_prefix())
+        .suffix(".tmp")
+        .tempfile_in(&dir)
+        .map(drop)
+        .map_err(|e| {
+            fail(
+                &dir,
+                e.kind(),
+                format!("output folder is not writable ({e})"),
+            )
+        })
+}
+
 /// Runs `body` on a buffered temporary file next to `path`, then renames the
-/// temporary file onto `path`. On any error the temporary file is removed.
+/// temporary file onto `path`. On any error the temporary file is removed
+/// (named [`temp_prefix`] + random + `.tmp`, in the folder of `path`).
 pub fn write_atomically(
     path: &Path,
     body: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
@@ -181,12 +256,9 @@ pub fn write_atomically(
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = target_dir(path);
     let tmp = tempfile::Builder::new()
-        .prefix(".normalnet-")
+        .prefix(&temp_prefix())
         .suffix(".tmp")
         .tempfile_in(&dir)
         .map_err(io)?;
@@ -272,10 +344,25 @@ pub(crate) fn fan(poly: &[u32], faces: &mut Vec<[u32; 3]>) {
     }
 }
 
-/// Iterates lines (without `\n` / `\r\n`) with 1-based numbers.
+/// The UTF-8 byte-order mark some Windows editors put at the start of text.
+pub(crate) const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// `bytes` without a leading UTF-8 byte-order mark.
+#[inline]
+pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(BOM).unwrap_or(bytes)
+}
+
+/// Iterates lines (without `\n` / `\r\n`) with 1-based numbers. A file
+/// without any `\n` but with `\r` (classic Mac line ends) is split at `\r`.
 pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
-    let bytes = bytes.strip_suffix(b"\n").unwrap_or(bytes);
-    bytes.split(|&b| b == b'\n').enumerate().map(|(i, l)| {
+    let sep = if !bytes.contains(&b'\n') && bytes.contains(&b'\r') {
+        b'\r'
+    } else {
+        b'\n'
+    };
+    let bytes = bytes.strip_suffix(&[sep]).unwrap_or(bytes);
+    bytes.split(move |&b| b == sep).enumerate().map(|(i, l)| {
         let l = l.strip_suffix(b"\r").unwrap_or(l);
         (i + 1, l)
     })

@@ -1,6 +1,9 @@
 //! Wavefront OBJ: `v x y z [w]` and `f` with `i`, `i/t`, `i//n`, `i/t/n`
 //! corners (1-based, negative = relative to the vertices read so far);
-//! polygons fan-triangulated; every other statement ignored.
+//! polygons fan-triangulated; every other statement (`vt`, `vn`, `g`,
+//! `usemtl`, vendor extensions, …) ignored. `v`, `f` and `fo` are matched
+//! case-insensitively; a line that does not start with a keyword (a letter
+//! followed by letters, digits or `_`) is refused with its line number.
 
 use super::{fan, lines, parse_f64, parse_i64, perr, show, tokens};
 use crate::error::MeshError;
@@ -20,6 +23,25 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     for (ln, line) in lines(bytes) {
         let mut tok = tokens(line);
         let Some(kw) = tok.next() else { continue };
+        if kw[0] == b'#' {
+            continue;
+        }
+        let kw = match kw {
+            [b'v' | b'V'] => b"v".as_slice(),
+            [b'f' | b'F'] => b"f",
+            [b'f' | b'F', b'o' | b'O'] => b"f",
+            _ if is_keyword(kw) => continue,
+            _ => {
+                return Err(perr(
+                    path,
+                    ln,
+                    format!(
+                        "unexpected {:?} at the start of the line, expected an OBJ statement (v, f, vt, ...)",
+                        show(kw)
+                    ),
+                ));
+            }
+        };
         match kw {
             b"v" => {
                 let mut p = [0.0; 3];
@@ -52,7 +74,7 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                 }
                 positions.push(p);
             }
-            b"f" | b"fo" => {
+            _ => {
                 poly.clear();
                 let nv = positions.len() as i64;
                 for t in tok {
@@ -113,7 +135,6 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                 }
                 fan(&poly, &mut faces);
             }
-            _ => {}
         }
     }
     let nv = positions.len();
@@ -128,6 +149,11 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
         ));
     }
     Ok((positions, faces))
+}
+
+/// An OBJ statement keyword: an ASCII letter, then letters, digits or `_`.
+fn is_keyword(tok: &[u8]) -> bool {
+    tok[0].is_ascii_alphabetic() && tok.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_')
 }
 
 pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {

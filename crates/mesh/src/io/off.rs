@@ -1,7 +1,9 @@
 //! Object File Format: `[C][N][ST]OFF` header (counts may follow on the same
 //! line), `#V #F #E`, one vertex per line (extra columns such as colours
 //! ignored), one polygon per line `n i_1 … i_n [colour]` (0-based,
-//! fan-triangulated). Binary OFF is refused.
+//! fan-triangulated). The header keyword is matched case-insensitively
+//! (`OFF`, `off`, `COFF`, `NOFF`, `STCNOFF`, …); binary, 4D and n-dimensional
+//! (`nOFF`) files are refused.
 
 use super::{fan, lines, parse_f64, parse_u64, perr, show, tokens};
 use crate::error::MeshError;
@@ -29,13 +31,7 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     };
     let mut head = tokens(first);
     let kw = head.next().unwrap_or_default();
-    if !kw.ends_with(b"OFF") || kw.contains(&b'4') || kw.starts_with(b"n") {
-        return Err(perr(
-            path,
-            ln,
-            format!("expected an OFF header, found {:?}", show(kw)),
-        ));
-    }
+    header(kw).map_err(|m| perr(path, ln, m))?;
     let mut counts: Vec<(usize, &[u8])> = head.map(|t| (ln, t)).collect();
     if counts
         .first()
@@ -163,6 +159,28 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
         ));
     }
     Ok((positions, faces))
+}
+
+/// Checks the header keyword `[ST][C][N]OFF` (any case); the error says why not.
+fn header(kw: &[u8]) -> Result<(), String> {
+    let upper = kw.to_ascii_uppercase();
+    let expected = || format!("expected an OFF header, found {:?}", show(kw));
+    let prefix = upper.strip_suffix(b"OFF").ok_or_else(expected)?;
+    // nOFF (lowercase n by the specification) is the dimension-n variant.
+    if prefix.contains(&b'4') || kw[..prefix.len()].ends_with(b"n") {
+        return Err(format!(
+            "{:?}: only 3D OFF is supported (4OFF / nOFF are not)",
+            show(kw)
+        ));
+    }
+    let rest = prefix.strip_prefix(b"ST").unwrap_or(prefix);
+    let rest = rest.strip_prefix(b"C").unwrap_or(rest);
+    let rest = rest.strip_prefix(b"N").unwrap_or(rest);
+    if rest.is_empty() {
+        Ok(())
+    } else {
+        Err(expected())
+    }
 }
 
 pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {

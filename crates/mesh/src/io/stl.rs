@@ -3,8 +3,16 @@
 //! STL stores each triangle's corners separately: bit-identical corners are
 //! merged into one vertex (first appearance order); nothing else is merged.
 //! The stored facet normals are ignored.
+//!
+//! Binary or ASCII is decided by the size rule first (a binary file has
+//! exactly 84 + 50·n bytes, whatever its header says), then by the content
+//! (`solid`/`SOLID`, text, a `facet` or `endsolid` keyword). A binary file
+//! with less than one record of padding after its n triangles is read (the
+//! padding ignored); a shorter one is refused as truncated. ASCII keywords
+//! are matched in any case; every line must be the next statement of the
+//! grammar, and the file must end after an `endsolid`.
 
-use super::{lines, parse_f64, perr, show, tokens};
+use super::{lines, parse_f64, perr, show, strip_bom, tokens};
 use crate::error::MeshError;
 use crate::geometry::triangle_normal;
 use crate::mesh::Mesh;
@@ -42,19 +50,18 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     if bytes.is_empty() {
         return Err(perr(path, 0, "no mesh in file: empty STL file"));
     }
-    if bytes.len() >= 84 {
-        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
-        if bytes.len() == 84 + 50 * n {
-            return parse_binary(bytes, n, path);
-        }
+    // The size rule first: a binary header may well start with "solid".
+    let count = announced(bytes);
+    if let Some(n) = count
+        && bytes.len() == binary_len(n)
+    {
+        return parse_binary(bytes, n, path);
     }
-    let head = &bytes[..bytes.len().min(512)];
-    let ascii = tokens(head).next() == Some(b"solid".as_slice())
-        && tokens(head).any(|t| t == b"facet" || t == b"endsolid");
-    if ascii {
-        return parse_ascii(bytes, path);
+    let text = strip_bom(bytes);
+    if looks_ascii(text) {
+        return parse_ascii(text, path);
     }
-    if bytes.len() < 84 {
+    let Some(n) = count else {
         return Err(perr(
             path,
             0,
@@ -63,17 +70,53 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                 bytes.len()
             ),
         ));
+    };
+    let want = binary_len(n);
+    if bytes.len() > want && bytes.len() - want < RECORD {
+        // Padding some writers add after the last triangle: less than one
+        // more record, so no triangle can be lost by ignoring it.
+        return parse_binary(&bytes[..want], n, path);
     }
-    let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
     Err(perr(
         path,
         0,
         format!(
-            "binary STL header announces {n} triangles ({} bytes) but the file has {} bytes",
-            84 + 50 * n,
-            bytes.len()
+            "binary STL header announces {n} triangles ({want} bytes) but the file has {} bytes{}",
+            bytes.len(),
+            if bytes.len() < want {
+                " (truncated)"
+            } else {
+                " (wrong triangle count, or not an STL file)"
+            }
         ),
     ))
+}
+
+/// Bytes per binary triangle record (normal, 3 corners, attribute count).
+const RECORD: usize = 50;
+
+/// The triangle count of a binary header, if the file is long enough to have one.
+fn announced(bytes: &[u8]) -> Option<usize> {
+    let c = bytes.get(80..84)?;
+    Some(u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize)
+}
+
+/// Size of a binary STL with `n` triangles.
+fn binary_len(n: usize) -> usize {
+    84 + RECORD * n
+}
+
+/// ASCII STL: starts with `solid` (any case) and its first 512 bytes are
+/// text (no control bytes but whitespace) containing a `facet` or `endsolid`
+/// keyword. Binary coordinates practically always contain other bytes.
+fn looks_ascii(text: &[u8]) -> bool {
+    let head = &text[..text.len().min(512)];
+    let keyword = |t: &[u8], k: &[u8]| t.eq_ignore_ascii_case(k);
+    tokens(head).next().is_some_and(|t| keyword(t, b"solid"))
+        && head
+            .iter()
+            .all(|&b| b.is_ascii_graphic() || b.is_ascii_whitespace())
+        && tokens(head).any(|t| keyword(t, b"facet") || keyword(t, b"endsolid"))
 }
 
 fn parse_binary(bytes: &[u8], n: usize, path: &Path) -> Result<Parsed, MeshError> {
@@ -104,20 +147,50 @@ fn parse_binary(bytes: &[u8], n: usize, path: &Path) -> Result<Parsed, MeshError
     Ok((weld.positions, faces))
 }
 
+/// Where the ASCII reader is in `solid { facet { outer loop { vertex } endloop } endfacet } endsolid`.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum State {
+    Outside,
+    Solid,
+    Facet,
+    Loop,
+    /// after `endloop`, before `endfacet`
+    FacetDone,
+}
+
 fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     let mut weld = Welder::new(bytes.len() / 200 + 3);
     let mut faces = Vec::with_capacity(bytes.len() / 250);
     let mut poly: Vec<u32> = Vec::with_capacity(4);
-    let mut in_loop = false;
+    let mut state = State::Outside;
     let mut last = 0;
     for (ln, line) in lines(bytes) {
-        last = ln;
         let mut tok = tokens(line);
-        match tok.next() {
-            Some(b"vertex") => {
-                if !in_loop {
-                    return Err(perr(path, ln, "vertex outside an outer loop"));
-                }
+        let Some(kw) = tok.next() else { continue };
+        last = ln;
+        let kw = kw.to_ascii_lowercase();
+        let unexpected = |expected: &str| {
+            perr(
+                path,
+                ln,
+                format!(
+                    "unexpected {:?}, expected {expected}",
+                    show(line.trim_ascii())
+                ),
+            )
+        };
+        state = match (state, kw.as_slice()) {
+            (State::Outside, b"solid") => State::Solid,
+            (State::Outside, _) => return Err(unexpected("solid")),
+            (State::Solid, b"facet") => State::Facet,
+            (State::Solid, b"endsolid") => State::Outside,
+            (State::Solid, _) => return Err(unexpected("facet or endsolid")),
+            (State::Facet, b"outer") => {
+                poly.clear();
+                State::Loop
+            }
+            (State::Facet, _) => return Err(unexpected("outer loop")),
+            (State::Loop, b"vertex") => {
                 let mut p = [0.0; 3];
                 for (k, c) in p.iter_mut().enumerate() {
                     let t = tok.next().ok_or_else(|| {
@@ -134,12 +207,9 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                     }
                 }
                 poly.push(weld.index(p));
+                State::Loop
             }
-            Some(b"outer") => {
-                in_loop = true;
-                poly.clear();
-            }
-            Some(b"endloop") => {
+            (State::Loop, b"endloop") => {
                 if poly.len() < 3 {
                     return Err(perr(
                         path,
@@ -152,15 +222,18 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                     ));
                 }
                 super::fan(&poly, &mut faces);
-                in_loop = false;
+                State::FacetDone
             }
-            _ => {}
-        }
+            (State::Loop, _) => return Err(unexpected("vertex or endloop")),
+            (State::FacetDone, b"endfacet") => State::Solid,
+            (State::FacetDone, _) => return Err(unexpected("endfacet")),
+        };
     }
-    if in_loop {
-        return Err(perr(path, last, "file ends inside a facet (truncated)"));
+    match state {
+        State::Outside => Ok((weld.positions, faces)),
+        State::Solid => Err(perr(path, last, "file ends without endsolid (truncated)")),
+        _ => Err(perr(path, last, "file ends inside a facet (truncated)")),
     }
-    Ok((weld.positions, faces))
 }
 
 pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {

@@ -336,3 +336,230 @@ fn stl_ascii_binary_merge_and_errors() {
         .to_string();
     assert!(e.contains(":5: non-finite"), "{e}");
 }
+
+// Issue 14: readers take what editors and exporters write, and refuse
+// anything else with the file and the line. The inputs are written to
+// temporary files and read back with `read_mesh`, as a user would.
+
+/// Writes `bytes` as `name` in a fresh temporary folder and reads it.
+fn read_temp(name: &str, bytes: &[u8]) -> (tempfile::TempDir, Result<Mesh, MeshError>) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let r = read_mesh(&path);
+    (dir, r)
+}
+
+const QUAD_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+
+#[test]
+fn issue_14_obj_with_byte_order_mark_keeps_its_first_vertex() {
+    let plain = parse_obj(QUAD_OBJ).unwrap();
+    let mut bytes = BOM.to_vec();
+    bytes.extend_from_slice(QUAD_OBJ.as_bytes());
+    let (_dir, r) = read_temp("bom.obj", &bytes);
+    assert_eq!(r.unwrap(), plain);
+    // The same for the other text formats.
+    for (format, ascii) in [
+        (Format::Off, false),
+        (Format::Ply, true),
+        (Format::Ply, false),
+    ] {
+        let mut bytes = BOM.to_vec();
+        bytes.extend(encode_mesh(
+            &plain,
+            format,
+            &WriteOptions { ply_ascii: ascii },
+        ));
+        let back = parse_mesh(&bytes, format, p()).unwrap();
+        assert_eq!(back, plain, "{format:?} ascii={ascii}");
+    }
+}
+
+#[test]
+fn issue_14_crlf_and_cr_line_ends_read_like_lf() {
+    let plain = parse_obj(QUAD_OBJ).unwrap();
+    for sep in ["\r\n", "\r"] {
+        let text = QUAD_OBJ.replace('\n', sep);
+        let (_dir, r) = read_temp("crlf.obj", text.as_bytes());
+        assert_eq!(r.unwrap(), plain, "{sep:?}");
+    }
+    for (format, name) in [(Format::Off, "crlf.off"), (Format::Stl, "crlf.stl")] {
+        let text = match format {
+            Format::Off => {
+                String::from_utf8(encode_mesh(&plain, format, &WriteOptions::default())).unwrap()
+            }
+            _ => ascii_stl(&plain, "solid", "facet"),
+        };
+        let (_dir, r) = read_temp(name, text.replace('\n', "\r\n").as_bytes());
+        assert_eq!(r.unwrap(), plain, "{name}");
+    }
+    let ply = encode_mesh(&plain, Format::Ply, &WriteOptions { ply_ascii: true });
+    let ply = String::from_utf8(ply).unwrap().replace('\n', "\r\n");
+    let (_dir, r) = read_temp("crlf.ply", ply.as_bytes());
+    assert_eq!(r.unwrap(), plain);
+}
+
+/// An ASCII STL of `m` with the given spelling of `solid` and `facet`.
+fn ascii_stl(m: &Mesh, solid: &str, facet: &str) -> String {
+    let mut s = format!("{solid} test\n");
+    for f in 0..m.num_faces() {
+        s += &format!("  {facet} normal 0 0 1\n    outer loop\n");
+        for c in m.corners(f) {
+            s += &format!("      vertex {} {} {}\n", c[0], c[1], c[2]);
+        }
+        s += "    endloop\n  endfacet\n";
+    }
+    s + "endsolid test\n"
+}
+
+#[test]
+fn issue_14_uppercase_keywords() {
+    let plain = parse_obj(QUAD_OBJ).unwrap();
+    // Uppercase ASCII STL (read as binary and refused before).
+    let upper = ascii_stl(&plain, "solid", "facet").to_ascii_uppercase();
+    assert!(upper.starts_with("SOLID"));
+    let (_dir, r) = read_temp("upper.stl", upper.as_bytes());
+    assert_eq!(r.unwrap(), plain);
+    // Mixed case, with a byte-order mark.
+    let mut mixed = BOM.to_vec();
+    mixed.extend(ascii_stl(&plain, "Solid", "Facet").into_bytes());
+    let (_dir, r) = read_temp("mixed.stl", &mixed);
+    assert_eq!(r.unwrap(), plain);
+    // OBJ V / F, OFF header in lower case and with prefixes.
+    let (_dir, r) = read_temp("upper.obj", QUAD_OBJ.to_ascii_uppercase().as_bytes());
+    assert_eq!(r.unwrap(), plain);
+    let off =
+        String::from_utf8(encode_mesh(&plain, Format::Off, &WriteOptions::default())).unwrap();
+    for head in ["off", "Off", "COFF", "NOFF", "STCNOFF", "stcoff"] {
+        let (_dir, r) = read_temp("h.off", off.replacen("OFF", head, 1).as_bytes());
+        assert_eq!(r.unwrap(), plain, "{head}");
+    }
+    for (head, want) in [
+        ("nOFF", "only 3D OFF"),
+        ("4OFF", "only 3D OFF"),
+        ("XOFF", "expected an OFF header"),
+        ("OFFX", "expected an OFF header"),
+    ] {
+        let (_dir, r) = read_temp("h.off", off.replacen("OFF", head, 1).as_bytes());
+        let e = r.unwrap_err().to_string();
+        assert!(e.contains("h.off:1:") && e.contains(want), "{head}: {e}");
+    }
+}
+
+#[test]
+fn issue_14_binary_stl_size_rule() {
+    let m = parse_obj(QUAD_OBJ).unwrap();
+    let bin = encode_mesh(&m, Format::Stl, &WriteOptions::default());
+    // A binary header that starts with "solid" and even mentions facets is
+    // still binary when the size matches 84 + 50·n.
+    let mut solid_head = bin.clone();
+    solid_head[..20].copy_from_slice(b"solid facet endsolid");
+    let (_dir, r) = read_temp("solid.stl", &solid_head);
+    assert_eq!(r.unwrap(), m);
+    // A few trailing bytes: read, ignored.
+    for extra in [1usize, 2, 49] {
+        let mut padded = bin.clone();
+        padded.extend(std::iter::repeat_n(0xAB, extra));
+        let (_dir, r) = read_temp("pad.stl", &padded);
+        assert_eq!(r.unwrap(), m, "{extra} trailing bytes");
+    }
+    // A whole record or more beyond the count: the count is wrong.
+    let mut long = bin.clone();
+    long.extend([0u8; 50]);
+    let (_dir, r) = read_temp("long.stl", &long);
+    let e = r.unwrap_err().to_string();
+    assert!(
+        e.contains("long.stl") && e.contains("wrong triangle count"),
+        "{e}"
+    );
+    // Truncated: refused with the file name.
+    for cut in [bin.len() - 1, bin.len() - 50, 90, 84] {
+        let (_dir, r) = read_temp("cut.stl", &bin[..cut]);
+        let e = r.unwrap_err().to_string();
+        assert!(
+            e.contains("cut.stl") && e.contains("announces 2 triangles") && e.contains("truncated"),
+            "{cut}: {e}"
+        );
+    }
+    let (_dir, r) = read_temp("tiny.stl", &bin[..40]);
+    let e = r.unwrap_err().to_string();
+    assert!(e.contains("tiny.stl") && e.contains("truncated"), "{e}");
+}
+
+#[test]
+fn issue_14_malformed_text_is_refused_with_file_and_line() {
+    let m = parse_obj(QUAD_OBJ).unwrap();
+    let stl = ascii_stl(&m, "solid", "facet");
+    let stl_lines: Vec<&str> = stl.lines().collect();
+    let cut_after = |n: usize| stl_lines[..n].join("\n") + "\n";
+    let cases: Vec<(&str, String, &str)> = vec![
+        // OBJ: a line that is no statement; binary junk.
+        ("a.obj", format!("{QUAD_OBJ}1 2 3\n"), "a.obj:7: unexpected \"1\""),
+        ("a.obj", format!("v 0 0 0\n\u{1}v 1 0 0\n{QUAD_OBJ}"), "a.obj:2: unexpected"),
+        // OFF: trailing junk, fewer elements than the header.
+        ("a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\njunk\n".into(), "a.off:7: data after"),
+        ("a.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n".into(), "a.off:5: file ends after 3 of 4 vertices"),
+        // ASCII STL: cut at a line boundary, junk, statements out of order.
+        ("a.stl", cut_after(stl_lines.len() - 1), "a.stl:15: file ends without endsolid"),
+        ("a.stl", cut_after(9), "a.stl:9: file ends inside a facet"),
+        ("a.stl", stl.replace("endloop", "endlop"), "a.stl:7: unexpected \"endlop\", expected vertex or endloop"),
+        ("a.stl", stl.replacen("outer loop", "vertex 0 0 0", 1), "a.stl:3: unexpected \"vertex 0 0 0\", expected outer loop"),
+        ("a.stl", format!("{stl}garbage\n"), "a.stl:17: unexpected \"garbage\", expected solid"),
+        // ASCII PLY: fewer elements than the header, junk after the data.
+        (
+            "a.ply",
+            "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n\
+             property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\n\
+             end_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n"
+                .into(),
+            "a.ply",
+        ),
+    ];
+    for (name, text, want) in cases {
+        let (_dir, r) = read_temp(name, text.as_bytes());
+        let e = r.unwrap_err().to_string();
+        assert!(
+            e.contains(want),
+            "{name} {text:?}: got {e:?}, want {want:?}"
+        );
+    }
+}
+
+#[test]
+fn issue_14_check_writable_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let ok = dir.path().join("out.obj");
+    check_writable(&ok).unwrap();
+    // The probe leaves nothing behind.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    let missing = dir.path().join("no/such/folder/out.obj");
+    let e = check_writable(&missing).unwrap_err().to_string();
+    assert!(
+        e.contains("no/such/folder") && e.contains("cannot be used"),
+        "{e}"
+    );
+    let e = check_writable(dir.path()).unwrap_err().to_string();
+    assert!(e.contains("is a folder"), "{e}");
+    let file = dir.path().join("file");
+    std::fs::write(&file, b"x").unwrap();
+    let e = check_writable(&file.join("out.obj"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a folder"), "{e}");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let ro = dir.path().join("ro");
+        std::fs::create_dir(&ro).unwrap();
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+        // root may write anyway: only check when the folder really is read-only
+        if tempfile::tempfile_in(&ro).is_err() {
+            let e = check_writable(&ro.join("out.obj")).unwrap_err().to_string();
+            assert!(e.contains("not writable"), "{e}");
+        }
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    // write_atomically's temporary files carry this process's id.
+    assert!(temp_prefix().starts_with(".normalnet-") && temp_prefix().ends_with('-'));
+}
