@@ -2,6 +2,7 @@
 //! One subcommand per file under `commands/`.
 
 mod commands;
+mod output;
 mod progress;
 
 use clap::{Parser, Subcommand};
@@ -44,7 +45,26 @@ enum Command {
 fn main() {
     let cli = Cli::parse();
     let quiet = cli.quiet;
+    // SIGINT / SIGTERM end the process without running destructors, so a
+    // temporary output file being written would stay behind: sweep this
+    // process's temporary files from the checked output folders, then exit
+    // as a shell expects (128 + SIGINT). Best effort: without a handler the
+    // signal kills the process as before.
+    let _ = ctrlc::set_handler(|| {
+        let removed = output::remove_temp_files();
+        if removed > 0 {
+            eprintln!("interrupted: removed {removed} temporary file(s)");
+        } else {
+            eprintln!("interrupted");
+        }
+        std::process::exit(130);
+    });
     let result = match cli.command {
+        // bench creates its folder before any work itself; checked here so
+        // that an interruption also sweeps its temporary files
+        Command::Bench(a) => {
+            output::check_dir(&a.out).and_then(|()| commands::bench::run(a, quiet))
+        }
         Command::Denoise(a) => commands::denoise::run(a, quiet),
         Command::Noise(a) => commands::noise::run(a, quiet),
         Command::Metrics(a) => commands::metrics::run(a, quiet),
@@ -53,11 +73,50 @@ fn main() {
         Command::Shapes(a) => commands::shapes::run(a, quiet),
         Command::Dataset(a) => commands::dataset::run(a, quiet),
         Command::Train(a) => commands::train::run(a, quiet),
-        Command::Bench(a) => commands::bench::run(a, quiet),
         Command::Render(a) => commands::render::run(a, quiet),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_chain(&e));
         std::process::exit(1);
+    }
+}
+
+/// The error and its causes, `: `-separated like anyhow's `{:#}`, without a
+/// cause whose text its parent already ends with: library errors such as
+/// `MeshError::Io` print their OS error and also return it as their source,
+/// which `{:#}` printed twice ("x.obj: No such file or directory (os error
+/// 2): No such file or directory (os error 2)").
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.ends_with(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn issue_14_os_errors_are_printed_once() {
+        let e = normalnet_mesh::read_mesh("/nonexistent/x.obj").unwrap_err();
+        let e = anyhow::Error::new(e).context("reading /nonexistent/x.obj");
+        let text = error_chain(&e);
+        assert_eq!(text.matches("os error").count(), 1, "{text}");
+        assert!(
+            text.starts_with("reading /nonexistent/x.obj: /nonexistent/x.obj: "),
+            "{text}"
+        );
+        // Distinct causes are all kept.
+        let e = anyhow::anyhow!("inner").context("middle").context("outer");
+        assert_eq!(error_chain(&e), "outer: middle: inner");
     }
 }

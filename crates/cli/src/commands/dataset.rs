@@ -99,6 +99,7 @@ fn load(
 /// Runs `normalnet dataset`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let params = VoxelParams::from_name(&args.preset)?;
+    crate::output::check_dir(&args.out)?;
     for input in &args.inputs {
         if let Some(t) = TEST_MODELS.iter().find(|t| input.contains(*t)) {
             eprintln!(

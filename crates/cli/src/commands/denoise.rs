@@ -10,6 +10,7 @@
 //! error rather than silently ignored.
 
 use super::denoise_normalnet::{self, NormalnetOptions};
+use crate::output;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_filters::{
@@ -321,13 +322,23 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
                 args,
                 &["iterations", "vertex-iterations", "mu-g", "model", "form"],
             )?;
-            Chosen::Normalnet(NormalnetOptions {
+            if args.vertex_iterations == Some(0) {
+                bail!(
+                    "--vertex-iterations 0 with --method normalnet would run the whole network and \
+                     return the input unchanged (NormalNet moves vertices only in its vertex-update \
+                     passes); give at least 1 (default 20)"
+                );
+            }
+            let options = NormalnetOptions {
                 model: args.model.clone(),
                 iterations: args.iterations,
                 vertex_iterations: args.vertex_iterations,
                 mu_g: args.mu_g,
                 guided: args.form.map(|f| f == NormalnetForm::Guided),
-            })
+            };
+            // the ranges, before the bundle and the mesh are loaded
+            denoise_normalnet::params(&options).validate()?;
+            Chosen::Normalnet(options)
         }
         MethodName::Gnf => {
             reject_unused(
@@ -448,6 +459,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let t_total = Instant::now();
     let chosen = choose(&args)?;
+    output::check_file(&args.output, output::MESH, "output mesh")?;
     let mesh =
         read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
     let gt: Option<Mesh> = match &args.gt {

@@ -1,5 +1,8 @@
 //! `normalnet info`: counts, bounding box, `l_e`, `d_s` and defects of a mesh
-//! (SPEC §1; the validation policy of `normalnet_mesh::validate`).
+//! (SPEC §1; the validation policy of `normalnet_mesh::validate`): boundary
+//! and non-manifold edges, non-manifold (bow-tie) vertices, edges traversed
+//! twice in the same direction (inconsistent orientation), degenerate and
+//! duplicate faces, unreferenced vertices.
 
 use anyhow::Context;
 use normalnet_mesh::io::{Format, read_mesh_as};
@@ -70,6 +73,8 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     println!("  Euler characteristic   {}", r.euler_characteristic);
     println!("  boundary edges         {}", r.boundary_edges);
     println!("  non-manifold edges     {}", r.non_manifold_edges);
+    println!("  non-manifold vertices  {}", r.non_manifold_vertices);
+    println!("  misoriented edges      {}", r.misoriented_edges);
     println!("  degenerate faces       {}", r.degenerate_faces);
     println!("  duplicate faces        {}", r.duplicate_faces);
     println!("  unreferenced vertices  {}", r.unreferenced_vertices);

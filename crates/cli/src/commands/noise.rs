@@ -46,6 +46,7 @@ pub enum Direction {
 
 /// Runs `normalnet noise`.
 pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
+    crate::output::check_file(&args.output, crate::output::MESH, "output mesh")?;
     let clean = read_mesh_as(&args.input, format_for(&args.input, args.format)?)
         .with_context(|| format!("reading {}", args.input.display()))?;
     let out_format = format_for(&args.output, None)?;

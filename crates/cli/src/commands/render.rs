@@ -19,7 +19,7 @@ pub struct Args {
     /// Ground truth with the same faces: colour faces by angular error against it.
     #[arg(long)]
     pub gt: Option<PathBuf>,
-    /// Output PNG.
+    /// Output PNG (the only format written; other extensions are refused).
     #[arg(long, short)]
     pub out: PathBuf,
     /// Camera direction as AZIMUTH,ELEVATION in degrees (azimuth about +y, 0 = from +z).
@@ -82,6 +82,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// Runs `normalnet render`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let start = Instant::now();
+    crate::output::check_file(&args.out, crate::output::PNG, "picture")?;
     let mesh = normalnet_mesh::read_mesh(&args.mesh)?;
     let mut options = RenderOptions {
         width: args.size.0,

@@ -35,6 +35,10 @@ pub struct Args {
 /// Runs `normalnet shapes`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let kind = args.kind.as_deref().map(ShapeKind::from_name).transpose()?;
+    crate::output::check_dir(&args.outdir)?;
+    if let Some(preview) = &args.preview {
+        crate::output::check_file(preview, crate::output::PNG, "contact sheet")?;
+    }
     std::fs::create_dir_all(&args.outdir)
         .with_context(|| format!("{}: cannot create directory", args.outdir.display()))?;
     let bar = Bar::new(quiet);

@@ -36,6 +36,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(p) = &args.preset {
         config.preset = p.clone();
     }
+    crate::output::check_dir(&args.out)?;
     let bar = crate::progress::Bar::new(quiet);
     let log = LogLines::new(quiet || std::io::stderr().is_terminal());
     let both = Both(&bar, &log);

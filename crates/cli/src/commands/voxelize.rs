@@ -35,14 +35,12 @@ pub struct Args {
 /// Runs `normalnet voxelize`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let params = VoxelParams::from_name(&args.preset)?;
+    crate::output::check_file(&args.out, &["npy", "png"], "voxel grid")?;
     let ext = args
         .out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("npy" | "png")) {
-        bail!("{}: output must end in .npy or .png", args.out.display());
-    }
     let mesh = read_mesh(&args.mesh)?;
     if args.face >= mesh.num_faces() {
         bail!(

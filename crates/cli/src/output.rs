@@ -1,0 +1,183 @@
+//! Output paths, checked before any work (issue 14): a missing or read-only
+//! folder, or an extension the command cannot write, is an error at once,
+//! not after an hour of denoising. Every command that writes a mesh or a
+//! picture calls [`check_file`] (or [`check_dir`] for an output folder)
+//! first; the folders checked are remembered so that an interruption can
+//! remove this process's temporary files from them ([`remove_temp_files`]).
+
+use anyhow::bail;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Extensions of the mesh writers (`normalnet_mesh::io::Format`).
+pub const MESH: &[&str] = &["obj", "off", "ply", "stl"];
+
+/// Pictures: the rasterizer writes PNG only.
+pub const PNG: &[&str] = &["png"];
+
+/// Folders this process writes into (for [`remove_temp_files`]).
+static FOLDERS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn remember(dir: &Path) {
+    let mut folders = FOLDERS.lock().unwrap_or_else(|e| e.into_inner());
+    if !folders.iter().any(|d| d == dir) {
+        folders.push(dir.to_path_buf());
+    }
+}
+
+/// Checks that `path` can be written: its extension (case-insensitive) is
+/// one of `extensions`, its folder exists and is writable, and it is not a
+/// folder itself. `what` names the output in the error ("output mesh").
+///
+/// # Errors
+/// A message naming the path and what is wrong.
+pub fn check_file(path: &Path, extensions: &[&str], what: &str) -> anyhow::Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let list = extensions
+        .iter()
+        .map(|e| format!(".{e}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    match ext {
+        Some(e) if extensions.contains(&e.as_str()) => {}
+        Some(e) => bail!(
+            "{}: cannot write a .{e} {what}; the extension must be {list}",
+            path.display()
+        ),
+        None => bail!(
+            "{}: no extension; the {what} must end in {list}",
+            path.display()
+        ),
+    }
+    normalnet_mesh::io::check_writable(path)?;
+    remember(&folder_of(path));
+    Ok(())
+}
+
+/// Checks that the output folder `dir` can be written: it is a writable
+/// folder, or it does not exist yet and its nearest existing ancestor is a
+/// writable folder (the command creates it).
+///
+/// # Errors
+/// A message naming the folder and what is wrong.
+pub fn check_dir(dir: &Path) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        bail!("{}: exists and is not a folder", dir.display());
+    }
+    let mut existing = dir;
+    while !existing.as_os_str().is_empty() && !existing.exists() {
+        existing = existing.parent().unwrap_or(Path::new(""));
+    }
+    let probe_dir = if existing.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        existing
+    };
+    // A probe file name inside the folder: check_writable creates its
+    // temporary file beside it.
+    normalnet_mesh::io::check_writable(&probe_dir.join("probe"))?;
+    remember(dir);
+    Ok(())
+}
+
+/// The folder a file is written in (`.` for a bare name).
+fn folder_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Removes this process's temporary files (`.normalnet-<pid>-*.tmp`, see
+/// `normalnet_mesh::io::temp_prefix`) from the checked folders and their
+/// direct sub-folders; returns how many were removed. Called on SIGINT /
+/// SIGTERM, when no destructor runs.
+pub fn remove_temp_files() -> usize {
+    let prefix = normalnet_mesh::io::temp_prefix();
+    let folders = FOLDERS.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    let mut removed = 0;
+    let mut sweep = |dir: &Path, recurse: bool| {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return Vec::new();
+        };
+        let mut subdirs = Vec::new();
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            if name.starts_with(&prefix) && name.ends_with(".tmp") {
+                if std::fs::remove_file(entry.path()).is_ok() {
+                    removed += 1;
+                }
+            } else if recurse && entry.file_type().is_ok_and(|t| t.is_dir()) {
+                subdirs.push(entry.path());
+            }
+        }
+        subdirs
+    };
+    for dir in &folders {
+        for sub in sweep(dir, true) {
+            sweep(&sub, false);
+        }
+    }
+    removed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn issue_14_output_checks_name_the_problem() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        check_file(&d.join("a.OBJ"), MESH, "output mesh").unwrap();
+        check_file(&d.join("r.png"), PNG, "picture").unwrap();
+        let e = check_file(&d.join("r.jpg"), PNG, "picture").unwrap_err();
+        assert!(
+            format!("{e:#}").contains("cannot write a .jpg picture; the extension must be .png"),
+            "{e:#}"
+        );
+        let e = check_file(&d.join("out.xyz"), MESH, "output mesh").unwrap_err();
+        assert!(format!("{e:#}").contains(".obj, .off, .ply, .stl"), "{e:#}");
+        let e = check_file(&d.join("noext"), MESH, "output mesh").unwrap_err();
+        assert!(format!("{e:#}").contains("no extension"), "{e:#}");
+        let e = check_file(&d.join("missing/out.obj"), MESH, "output mesh").unwrap_err();
+        assert!(format!("{e:#}").contains("missing"), "{e:#}");
+        // Folders: existing, to be created, blocked by a file.
+        check_dir(d).unwrap();
+        check_dir(&d.join("new/deeper")).unwrap();
+        std::fs::write(d.join("file"), b"x").unwrap();
+        let e = check_dir(&d.join("file")).unwrap_err();
+        assert!(format!("{e:#}").contains("not a folder"), "{e:#}");
+        assert!(check_dir(&d.join("file/sub")).is_err());
+        // Nothing was left behind by the probes.
+        let names: Vec<_> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("file")]);
+    }
+
+    #[test]
+    fn issue_14_interrupted_temp_files_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let sub = dir.path().join("model");
+        std::fs::create_dir(&sub).unwrap();
+        check_dir(dir.path()).unwrap();
+        let prefix = normalnet_mesh::io::temp_prefix();
+        let ours = [
+            dir.path().join(format!("{prefix}abc.tmp")),
+            sub.join(format!("{prefix}def.tmp")),
+        ];
+        let theirs = dir.path().join(".normalnet-1-abc.tmp");
+        for p in ours.iter().chain([&theirs]) {
+            std::fs::write(p, b"half a mesh").unwrap();
+        }
+        assert_eq!(remove_temp_files(), 2);
+        assert!(ours.iter().all(|p| !p.exists()));
+        assert!(theirs.exists(), "another process's file is left alone");
+    }
+}
