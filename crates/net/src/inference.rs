@@ -36,12 +36,13 @@ pub struct DenoiseParams {
     pub mu_g: f64,
     /// faces per network batch (default 256)
     pub batch: usize,
-    /// Guided form: the network's normals are the guidance of one
-    /// joint-bilateral pass over the current face normals (range width μ_g,
-    /// spatial 2·d_s, as GNF and the GT-guided targets), instead of being
-    /// the filtered normals themselves (the paper's form). With perfect
-    /// network outputs this is the oracle.
-    pub guided: bool,
+    /// Guided form from this filtering iteration on (1-based; 0 = never,
+    /// the paper's form throughout): the network's normals are the guidance
+    /// of one joint-bilateral pass over the current face normals (range
+    /// width μ_g, spatial 2·d_s, as GNF and the GT-guided targets) instead
+    /// of being the filtered normals themselves. With perfect network
+    /// outputs this is the oracle.
+    pub guided_from: usize,
 }
 
 impl Default for DenoiseParams {
@@ -51,7 +52,7 @@ impl Default for DenoiseParams {
             vertex_iterations: 20,
             mu_g: 0.35,
             batch: 256,
-            guided: false,
+            guided_from: 0,
         }
     }
 }
@@ -144,7 +145,7 @@ pub fn denoise(
         )?;
         times.add(&t);
         let t = Instant::now();
-        let normals = if params.guided {
+        let normals = if params.guided_from > 0 && k >= params.guided_from {
             gt_guided_normals(
                 &current,
                 &topology,

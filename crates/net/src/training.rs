@@ -128,6 +128,10 @@ pub struct TrainConfig {
     /// from the bundle's network k (same preset and residual form), and
     /// the manifest counts its samples and seconds on top of the bundle's
     pub init_from: String,
+    /// κ: cubes of side `κ·d_s/α_c` instead of the preset's `d_s/α_c` (SPEC
+    /// §5 scale note; 1 = the preset, ≈ 1.8 = the paper's implied extent).
+    /// The bundle records the resulting `α_c/κ` as its `voxel.alpha_c`.
+    pub voxel_scale: f64,
 }
 
 impl Default for TrainConfig {
@@ -157,6 +161,7 @@ impl Default for TrainConfig {
             loss: "mse".into(),
             residual_from: 0,
             init_from: String::new(),
+            voxel_scale: 1.0,
         }
     }
 }
@@ -207,6 +212,12 @@ impl TrainConfig {
         if engine == Engine::Burn && loss != Loss::Mse {
             return Err(bad("the burn engine trains with loss = \"mse\" only".into()));
         }
+        if !(self.voxel_scale > 0.0 && self.voxel_scale.is_finite()) {
+            return Err(bad(format!(
+                "voxel_scale = {} must be positive",
+                self.voxel_scale
+            )));
+        }
         if !(self.lr > 0.0 && self.lr.is_finite()) {
             return Err(bad(format!("lr = {} must be positive", self.lr)));
         }
@@ -237,6 +248,17 @@ impl TrainConfig {
         base * self
             .lr_decay
             .powf(step as f64 / self.lr_decay_steps.max(1) as f64)
+    }
+
+    /// The voxel grid of the run: the preset's, cubes scaled by `voxel_scale`.
+    pub fn voxel_params(&self) -> VoxelParams {
+        let mut voxel = match self.preset.as_str() {
+            "paper" => VoxelParams::paper(),
+            "tiny" => VoxelParams::tiny(),
+            _ => VoxelParams::lite(),
+        };
+        voxel.alpha_c /= self.voxel_scale;
+        voxel
     }
 
     /// Whether network `k` (0-based) predicts residuals.
@@ -388,11 +410,7 @@ pub fn train(
             .as_bytes(),
     )?;
     let model_config = ModelConfig::preset(&config.preset)?;
-    let voxel = match config.preset.as_str() {
-        "paper" => VoxelParams::paper(),
-        "tiny" => VoxelParams::tiny(),
-        _ => VoxelParams::lite(),
-    };
+    let voxel = config.voxel_params();
     let plain = Device::flex();
     let init = init_bundle(config)?;
     let mut pairs = make_pairs(config, &config.sources, config.seed, progress)?;
@@ -683,6 +701,13 @@ fn init_bundle(config: &TrainConfig) -> Result<Option<(PathBuf, Manifest)>, NetE
         return Err(bad(format!(
             "init_from: the bundle is preset {:?}, the run {:?}",
             manifest.preset, config.preset
+        )));
+    }
+    if manifest.voxel != config.voxel_params() {
+        return Err(bad(format!(
+            "init_from: the bundle's voxel grid {:?} differs from the run's {:?} (voxel_scale)",
+            manifest.voxel,
+            config.voxel_params()
         )));
     }
     if manifest.networks.len() != INTERVALS.len() {

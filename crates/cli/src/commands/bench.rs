@@ -302,9 +302,12 @@ impl Settings {
                         )
                     }
                     "model" => options.model = Some(PathBuf::from(v.as_str().with_context(bad)?)),
-                    "guided" => options.guided = Some(v.as_bool().with_context(bad)?),
+                    "guided_from" => {
+                        options.guided_from =
+                            Some(v.as_integer().filter(|i| *i >= 0).with_context(bad)? as usize)
+                    }
                     _ => bail!(
-                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided)"
+                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided_from)"
                     ),
                 }
             }
@@ -330,8 +333,8 @@ impl Settings {
         if let Some(m) = &options.model {
             parts.push(format!("model={}", m.display()));
         }
-        if let Some(g) = options.guided {
-            parts.push(format!("guided={g}"));
+        if let Some(g) = options.guided_from {
+            parts.push(format!("guided_from={g}"));
         }
         Ok((options, parts.join(" ")))
     }

@@ -235,11 +235,12 @@ pub struct Args {
     /// NormalNet model bundle folder (default: the shipped bundle).
     #[arg(long)]
     pub model: Option<PathBuf>,
-    /// NormalNet output form: `paper` (the network's normal is the filtered
-    /// normal) or `guided` (it guides a joint-bilateral pass over the
-    /// current normals, range width μ_g, spatial 2·d_s).
-    #[arg(long, value_enum)]
-    pub form: Option<NormalnetForm>,
+    /// NormalNet: from this filtering iteration on, the network's normals
+    /// guide a joint-bilateral pass over the current normals (range width
+    /// μ_g, spatial 2·d_s) instead of being the filtered normals (0 = never:
+    /// the paper's form).
+    #[arg(long)]
+    pub guided_from: Option<usize>,
     /// Ground-truth mesh: print error metrics of the result (required by gt-gnf).
     #[arg(long)]
     pub gt: Option<PathBuf>,
@@ -253,15 +254,6 @@ enum Chosen {
     Normalnet(NormalnetOptions),
     Classical(Method),
     GtGuided(GtGuidedGnfParams),
-}
-
-/// NormalNet's output form (`--form`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum NormalnetForm {
-    /// the network's normal is the filtered normal (the paper)
-    Paper,
-    /// the network's normal guides a joint-bilateral pass
-    Guided,
 }
 
 /// Rejects flags that the chosen method does not use.
@@ -284,7 +276,7 @@ fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
         ("alpha0", args.alpha0.is_some()),
         ("alpha-decay", args.alpha_decay.is_some()),
         ("model", args.model.is_some()),
-        ("form", args.form.is_some()),
+        ("guided-from", args.guided_from.is_some()),
     ];
     for (flag, present) in given {
         if present && !used.contains(&flag) {
@@ -320,7 +312,13 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
         MethodName::Normalnet => {
             reject_unused(
                 args,
-                &["iterations", "vertex-iterations", "mu-g", "model", "form"],
+                &[
+                    "iterations",
+                    "vertex-iterations",
+                    "mu-g",
+                    "model",
+                    "guided-from",
+                ],
             )?;
             if args.vertex_iterations == Some(0) {
                 bail!(
@@ -334,7 +332,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
                 iterations: args.iterations,
                 vertex_iterations: args.vertex_iterations,
                 mu_g: args.mu_g,
-                guided: args.form.map(|f| f == NormalnetForm::Guided),
+                guided_from: args.guided_from,
             };
             // the ranges, before the bundle and the mesh are loaded
             denoise_normalnet::params(&options).validate()?;
@@ -491,6 +489,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 "iterations": options.iterations,
                 "vertex_iterations": options.vertex_iterations,
                 "mu_g": options.mu_g,
+                "guided_from": options.guided_from,
             });
             (out, parameters)
         }

@@ -26,8 +26,8 @@ pub struct NormalnetOptions {
     pub vertex_iterations: Option<usize>,
     /// μ_g: picks the nearest of the bundle's outputs (`--mu-g`)
     pub mu_g: Option<f64>,
-    /// guided form: network normals guide a joint-bilateral pass (`--guided`)
-    pub guided: Option<bool>,
+    /// guided form from this iteration on, 0 = never (`--guided-from`)
+    pub guided_from: Option<usize>,
 }
 
 /// The bundle folder to use: `--model`, else `$NORMALNET_MODEL`, else
@@ -50,7 +50,7 @@ pub fn params(options: &NormalnetOptions) -> DenoiseParams {
         vertex_iterations: options.vertex_iterations.unwrap_or(d.vertex_iterations),
         mu_g: options.mu_g.unwrap_or(d.mu_g),
         batch: d.batch,
-        guided: options.guided.unwrap_or(d.guided),
+        guided_from: options.guided_from.unwrap_or(d.guided_from),
     }
 }
 
