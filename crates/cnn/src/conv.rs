@@ -123,6 +123,7 @@ impl FoldedConv {
     /// `input`: `[n, n, n, cin]` channels-last; `out`: `[m, m, m, cout]` with
     /// `m = output_side(n)`. With `accumulate`, the convolution is added to
     /// what `out` holds (the residual sum).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn run(
         &self,
         level: Level,
@@ -194,6 +195,7 @@ impl FoldedConv {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx2,fma")]
+#[allow(clippy::too_many_arguments)]
 fn dense_avx512<const CO: usize, const S: usize>(
     c: &FoldedConv,
     input: &[f32],
@@ -209,6 +211,7 @@ fn dense_avx512<const CO: usize, const S: usize>(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
 fn dense_avx2<const CO: usize, const S: usize>(
     c: &FoldedConv,
     input: &[f32],
@@ -233,6 +236,7 @@ fn taps(o: usize, s: usize, p: usize, k: usize, n: usize) -> std::ops::Range<usi
 }
 
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn dense<const CO: usize, const S: usize, F: MulAdd>(
     c: &FoldedConv,
     input: &[f32],

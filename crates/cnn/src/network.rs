@@ -259,7 +259,7 @@ impl Cnn {
     pub fn forward(&self, grids: &[f32], out: &mut [f32]) -> Result<(), CnnError> {
         let g = self.grid_len();
         let no = self.outputs();
-        if grids.len() % g != 0 || out.len() != grids.len() / g * no {
+        if !grids.len().is_multiple_of(g) || out.len() != grids.len() / g * no {
             return Err(CnnError::BufferSize {
                 what: "output batch",
                 actual: out.len(),
