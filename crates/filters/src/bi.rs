@@ -70,6 +70,10 @@ pub struct BiParams {
     pub vertex_iterations: usize,
     /// Keep boundary vertices fixed during vertex updates; default false.
     pub fix_boundary: bool,
+    /// Damp vertex moves that fold a face against its filtered normal (the
+    /// fold guard of [`mod@crate::vertex_update`]); default true. The
+    /// reference code has no guard: false reproduces it.
+    pub fold_guard: bool,
 }
 
 impl Default for BiParams {
@@ -81,6 +85,7 @@ impl Default for BiParams {
             normal_iterations: 20,
             vertex_iterations: 10,
             fix_boundary: false,
+            fold_guard: true,
         }
     }
 }
@@ -183,6 +188,9 @@ pub fn bi(mesh: &Mesh, params: &BiParams, progress: &dyn Progress) -> Result<Mes
             vertex_iterations: params.vertex_iterations,
             schedule: Schedule::Interleaved,
             fix_boundary: params.fix_boundary,
+            fold_guard: params
+                .fold_guard
+                .then_some(crate::vertex_update::FOLD_GUARD_COS),
         },
         "BI",
         progress,

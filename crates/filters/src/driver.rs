@@ -11,7 +11,7 @@
 //!   local scheme): `N_f` passes on the input geometry, each reading the
 //!   previous pass's normals, then `N_v` vertex passes once.
 
-use crate::vertex_update::{VertexUpdateBuffers, vertex_update_in_place_fixed};
+use crate::vertex_update::{VertexUpdate, VertexUpdateBuffers, vertex_update_with};
 use normalnet_mesh::vec3::Vec3;
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 
@@ -41,7 +41,7 @@ pub enum Schedule {
 }
 
 /// How [`run_filter`] arranges the passes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Passes {
     /// N_f: normal-filtering passes
     pub normal_iterations: usize,
@@ -51,6 +51,9 @@ pub struct Passes {
     pub schedule: Schedule,
     /// keep boundary vertices in place
     pub fix_boundary: bool,
+    /// the fold guard's cone ([`crate::vertex_update::VertexUpdate::fold_guard`]);
+    /// `None` off
+    pub fold_guard: Option<f64>,
 }
 
 /// Runs `filter` on `mesh` with the passes of `passes`. Reports one progress
@@ -68,9 +71,14 @@ pub fn run_filter(
         vertex_iterations,
         schedule,
         fix_boundary,
+        fold_guard,
     } = passes;
     let boundary = fix_boundary.then(|| topology.boundary_vertices());
-    let fixed = boundary.as_deref();
+    let update = VertexUpdate {
+        iterations: vertex_iterations,
+        fixed: boundary.as_deref(),
+        fold_guard,
+    };
     let n_faces = mesh.num_faces();
     let mut positions = mesh.positions.clone();
     let mut geometry = FaceGeometry::new(mesh);
@@ -86,13 +94,12 @@ pub fn run_filter(
                     geometry.update(&current);
                 }
                 filter.pass(topology, &geometry, &geometry.normals, &mut filtered);
-                vertex_update_in_place_fixed(
+                vertex_update_with(
                     &mut positions,
                     &mesh.faces,
                     topology,
                     &filtered,
-                    vertex_iterations,
-                    fixed,
+                    &update,
                     &mut buffers,
                 );
                 progress.advance(1);
@@ -105,13 +112,12 @@ pub fn run_filter(
                 std::mem::swap(&mut previous, &mut filtered);
                 progress.advance(1);
             }
-            vertex_update_in_place_fixed(
+            vertex_update_with(
                 &mut positions,
                 &mesh.faces,
                 topology,
                 &previous,
-                vertex_iterations,
-                fixed,
+                &update,
                 &mut buffers,
             );
         }

@@ -55,6 +55,10 @@ pub struct GnfParams {
     pub normal_iterations: usize,
     /// N_v: vertex-update passes after each normal pass; default 10.
     pub vertex_iterations: usize,
+    /// Damp vertex moves that fold a face against its filtered normal (the
+    /// fold guard of [`mod@crate::vertex_update`]); default true. The
+    /// reference code has no guard: false reproduces it.
+    pub fold_guard: bool,
 }
 
 impl Default for GnfParams {
@@ -65,6 +69,7 @@ impl Default for GnfParams {
             radius_over_ds: 2.0,
             normal_iterations: 20,
             vertex_iterations: 10,
+            fold_guard: true,
         }
     }
 }
@@ -316,6 +321,9 @@ pub fn gnf(mesh: &Mesh, params: &GnfParams, progress: &dyn Progress) -> Result<M
             vertex_iterations: params.vertex_iterations,
             schedule: Schedule::Interleaved,
             fix_boundary: false,
+            fold_guard: params
+                .fold_guard
+                .then_some(crate::vertex_update::FOLD_GUARD_COS),
         },
         "GNF",
         progress,

@@ -36,7 +36,8 @@ pub use gt_guided::{
 pub use l0::{L0Params, l0};
 pub use sun07::{Sun07, Sun07Params, sun07};
 pub use vertex_update::{
-    VertexUpdateBuffers, vertex_update, vertex_update_in_place, vertex_update_in_place_fixed,
+    FOLD_GUARD_COS, FOLD_GUARD_HALVINGS, VertexUpdate, VertexUpdateBuffers, vertex_update,
+    vertex_update_in_place, vertex_update_in_place_fixed, vertex_update_with,
 };
 pub use vt::{Vt, VtParams, binary_vote, symmetric_eigen, vt};
 
@@ -103,7 +104,22 @@ impl Method {
     }
 
     /// Denoises `mesh` (the result keeps its vertex and face order).
+    ///
+    /// Robust to stray vertices (issue 14): the vertices that
+    /// [`normalnet_mesh::outliers`] flags (far outside the mesh's robust
+    /// extent, or isolated spikes) keep their positions, and the faces
+    /// touching them are left out of the denoising
+    /// ([`normalnet_mesh::outliers::denoise_around`]): they take no part in
+    /// `l_e`, `d_s`, neighbourhoods or vertex updates, so the other
+    /// vertices end exactly where they would on the mesh without them.
+    /// A mesh without outliers is denoised as it is.
     pub fn denoise(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
+        normalnet_mesh::outliers::denoise_around(mesh, |m| self.denoise_all(m, progress))
+    }
+
+    /// Denoises every vertex of `mesh`, outliers included (the plain method;
+    /// [`Method::denoise`] is what users want).
+    pub fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
         match self {
             Method::Gnf(p) => gnf(mesh, p, progress),
             Method::Bnf(p) => bnf(mesh, p, progress),

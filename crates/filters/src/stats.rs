@@ -54,6 +54,19 @@ pub fn mean_edge_length(mesh: &Mesh, topology: &Topology) -> f64 {
     if count == 0 { 0.0 } else { sum / count as f64 }
 }
 
+/// The spatial width `σ = sigma_over_ds · d_s` of a filtering pass, with
+/// `d_s` from the current face centres; `None` when it is not positive and
+/// finite (no edge-adjacent faces, or a collapsed mesh), in which case the
+/// pass keeps the normals it was given.
+pub(crate) fn spatial_sigma(
+    topology: &Topology,
+    centres: &[Vec3],
+    sigma_over_ds: f64,
+) -> Option<f64> {
+    let sigma = sigma_over_ds * mean_centre_distance(topology, centres);
+    (sigma > 0.0 && sigma.is_finite()).then_some(sigma)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -85,17 +98,4 @@ mod tests {
         let b = geometry::mean_edge_length(&m, &t);
         assert!((a - b).abs() < 1e-12 * b);
     }
-}
-
-/// The spatial width `σ = sigma_over_ds · d_s` of a filtering pass, with
-/// `d_s` from the current face centres; `None` when it is not positive and
-/// finite (no edge-adjacent faces, or a collapsed mesh), in which case the
-/// pass keeps the normals it was given.
-pub(crate) fn spatial_sigma(
-    topology: &Topology,
-    centres: &[Vec3],
-    sigma_over_ds: f64,
-) -> Option<f64> {
-    let sigma = sigma_over_ds * mean_centre_distance(topology, centres);
-    (sigma > 0.0 && sigma.is_finite()).then_some(sigma)
 }

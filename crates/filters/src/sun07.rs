@@ -35,6 +35,10 @@ pub struct Sun07Params {
     pub fix_boundary: bool,
     /// When vertices move; default [`Schedule::NormalsThenVertices`] (the paper).
     pub schedule: Schedule,
+    /// Damp vertex moves that fold a face against its filtered normal (the
+    /// fold guard of [`mod@crate::vertex_update`]); default true. The
+    /// reference code has no guard: false reproduces it.
+    pub fold_guard: bool,
 }
 
 impl Default for Sun07Params {
@@ -46,6 +50,7 @@ impl Default for Sun07Params {
             include_centre: true,
             schedule: Schedule::NormalsThenVertices,
             fix_boundary: true,
+            fold_guard: true,
         }
     }
 }
@@ -123,6 +128,9 @@ pub fn sun07(
             vertex_iterations: params.vertex_iterations,
             schedule: params.schedule,
             fix_boundary: params.fix_boundary,
+            fold_guard: params
+                .fold_guard
+                .then_some(crate::vertex_update::FOLD_GUARD_COS),
         },
         "Sun07",
         progress,

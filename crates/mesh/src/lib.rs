@@ -14,6 +14,7 @@ pub mod io;
 pub mod mesh;
 pub mod metrics;
 pub mod noise;
+pub mod outliers;
 pub mod progress;
 pub mod topology;
 pub mod validate;
@@ -26,6 +27,7 @@ pub use io::{Format, WriteOptions, read_mesh, read_mesh_as, write_mesh, write_me
 pub use mesh::Mesh;
 pub use metrics::{Metrics, compare, per_face_angle_errors};
 pub use noise::{NoiseDirection, NoiseParams, add_noise};
+pub use outliers::{OutlierParams, Outliers, outlier_vertices};
 pub use progress::{NoProgress, Progress};
 pub use topology::{NO_FACE, Topology};
 pub use validate::{MeshReport, validate};

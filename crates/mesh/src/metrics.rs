@@ -11,6 +11,9 @@
 //!   vertices, `A_j` result face areas, `d` the exact distance to the GT
 //!   surface ([`crate::bvh`]). Reported with `E_v / l_e(GT)` and
 //!   `E_v / bbox diagonal(GT)`.
+//! - `flipped_faces` (issue 14): result faces whose unit normal opposes the
+//!   ground truth's (`n_g · n_r < 0`, an angle over 90°); degenerate faces
+//!   are not counted (they have no direction).
 //! - distances: area-weighted mean (same weights as `E_v`), one-sided maxima
 //!   over the vertices used by faces (result → GT, GT → result) and their
 //!   maximum, the vertex-sampled symmetric Hausdorff distance.
@@ -43,6 +46,9 @@ pub struct Metrics {
     pub frac_faces_over_30deg: f64,
     /// number of degenerate (zero-normal) result faces
     pub degenerate_faces_result: usize,
+    /// result faces folded over: normal opposed to the ground truth's
+    /// (`n_g · n_r < 0`); degenerate faces not counted
+    pub flipped_faces: usize,
     /// `E_v`: area-weighted RMS distance of result vertices to the GT surface
     pub e_v: f64,
     /// `E_v / l_e(GT)`
@@ -135,13 +141,20 @@ pub fn compare_with_progress(
     check_counts(gt, result)?;
     let nf = gt.num_faces();
     progress.start("metrics", 4);
-    let theta: Vec<f64> = {
+    let (theta, flipped_faces) = {
         let ng = face_normals(gt);
         let nr = face_normals(result);
-        ng.par_iter()
+        let theta: Vec<f64> = ng
+            .par_iter()
             .zip(nr.par_iter())
             .map(|(&a, &b)| face_angle(a, b))
-            .collect()
+            .collect();
+        let flipped = ng
+            .par_iter()
+            .zip(nr.par_iter())
+            .filter(|(a, b)| vec3::dot(**a, **b) < 0.0)
+            .count();
+        (theta, flipped)
     };
     let degenerate_faces_result = crate::geometry::count_degenerate_faces(result);
     let deg: Vec<f64> = theta.iter().map(|t| t.to_degrees()).collect();
@@ -209,6 +222,7 @@ pub fn compare_with_progress(
         max_angle_deg,
         frac_faces_over_30deg,
         degenerate_faces_result,
+        flipped_faces,
         e_v,
         e_v_over_le: e_v / le,
         e_v_over_bbox_diag: e_v / diag,
@@ -352,6 +366,7 @@ mod tests {
         assert_eq!(r.e_v, 0.0);
         assert_eq!(r.hausdorff, 0.0);
         assert_eq!(r.degenerate_faces_result, 0);
+        assert_eq!(r.flipped_faces, 0);
         assert!(r.faces_identical);
     }
 
@@ -375,6 +390,7 @@ mod tests {
         assert!((a[0] - 180.0).abs() < 1e-12 && a[1] == 0.0);
         let r = compare(&m, &flipped).unwrap();
         assert!((r.e_a_deg - 45.0).abs() < 1e-12);
+        assert_eq!(r.flipped_faces, 1);
         assert!(!r.faces_identical);
     }
 
@@ -387,6 +403,8 @@ mod tests {
         let r = compare(&m, &m.with_positions(p)).unwrap();
         assert_eq!(r.degenerate_faces_result, 2); // [0,1,3] and [1,2,3]
         assert!(r.max_angle_deg >= 90.0);
+        // Degenerate faces have no direction: not counted as flipped.
+        assert_eq!(r.flipped_faces, 0);
     }
 
     #[test]

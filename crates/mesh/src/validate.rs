@@ -58,6 +58,9 @@ pub struct MeshReport {
     pub components: usize,
     /// `V − E + F` over referenced vertices
     pub euler_characteristic: i64,
+    /// vertices far outside the robust extent or isolated spikes
+    /// ([`crate::outliers`], default thresholds)
+    pub outlier_vertices: usize,
 }
 
 impl MeshReport {
@@ -94,6 +97,12 @@ impl MeshReport {
             self.unreferenced_vertices,
             "unreferenced vertices",
             " (kept, never moved)",
+        );
+        add(
+            self.outlier_vertices,
+            "outlier vertices far outside the mesh or isolated spikes",
+            " (kept in place with their faces by the classical methods; \
+             `denoise --remove-outliers` drops them)",
         );
         w
     }
@@ -188,6 +197,7 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
         unreferenced_vertices: mesh.num_vertices() - referenced,
         components,
         euler_characteristic: referenced as i64 - topo.edges.len() as i64 + mesh.num_faces() as i64,
+        outlier_vertices: crate::outliers::outlier_vertices(mesh, &Default::default()).count(),
     }
 }
 
