@@ -2,6 +2,7 @@
 //! One subcommand per file under `commands/`.
 
 mod commands;
+mod input;
 mod output;
 mod progress;
 

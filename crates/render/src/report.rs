@@ -37,6 +37,8 @@ pub struct RunRecord {
     pub e_v_over_le: Option<f64>,
     /// Hausdorff distance between result and ground-truth surfaces (both ways)
     pub hausdorff: Option<f64>,
+    /// faces whose normal opposes the ground truth's (folded over)
+    pub flipped_faces: Option<usize>,
     /// wall-clock seconds of the denoising call alone
     pub denoise_seconds: Option<f64>,
     /// wall-clock seconds of the whole run (denoise + metrics + rendering)
@@ -594,6 +596,7 @@ mod tests {
             e_v: Some(e_v),
             e_v_over_le: Some(e_v * 10.0),
             hausdorff: Some(0.5),
+            flipped_faces: Some(3),
             denoise_seconds: Some(1.0),
             total_seconds: Some(2.0),
             error: None,

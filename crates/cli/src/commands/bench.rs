@@ -21,6 +21,7 @@
 
 use crate::commands::denoise_normalnet::{self, NormalnetOptions};
 use crate::commands::render::{parse_size, parse_view};
+use crate::input;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_filters::{GtGuidedGnfParams, Method, gt_guided_gnf};
@@ -420,6 +421,7 @@ fn record_from(
         e_v: Some(m.e_v),
         e_v_over_le: Some(m.e_v_over_le),
         hausdorff: Some(m.hausdorff),
+        flipped_faces: Some(m.flipped_faces),
         denoise_seconds: denoise_s,
         total_seconds: Some(total_s),
         error: None,
@@ -727,8 +729,8 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         let load_start = Instant::now();
         let loaded = (|| -> anyhow::Result<(Mesh, Mesh)> {
             Ok((
-                read_mesh(dir.join("Noisy.obj"))?,
-                read_mesh(dir.join("Original.obj"))?,
+                input::read_mesh(dir.join("Noisy.obj"))?,
+                input::read_mesh(dir.join("Original.obj"))?,
             ))
         })();
         let (noisy, gt) = match loaded {

@@ -10,10 +10,10 @@
 //! `yaws.npy` `[N]` f32 (radians), `manifest.json`, and with `--pictures K`
 //! PNG pictures of the first K grids.
 
+use crate::input::read_mesh;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_mesh::Progress;
-use normalnet_mesh::io::read_mesh;
 use normalnet_mesh::noise::{NoiseParams, add_noise};
 use normalnet_voxel::inspect::{grid_picture, write_npy, write_png};
 use normalnet_voxel::samples::{NUM_CATEGORIES, TARGET_LEN};

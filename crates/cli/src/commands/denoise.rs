@@ -8,8 +8,14 @@
 //! the method's params struct (`GnfParams::default()`, ...), which is also
 //! what `--help` shows. A flag that does not apply to the chosen method is an
 //! error rather than silently ignored.
+//!
+//! Outlier vertices (issue 14, `normalnet_mesh::outliers`) are warned about
+//! on reading; every method, NormalNet included, leaves them and their
+//! faces out of the denoising and in place, and `--remove-outliers` drops
+//! them (and their faces) from the output instead.
 
 use super::denoise_normalnet::{self, NormalnetOptions};
+use crate::input::read_mesh;
 use crate::output;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
@@ -19,7 +25,8 @@ use normalnet_filters::{
 };
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::metrics::compare;
-use normalnet_mesh::{Mesh, read_mesh, write_mesh};
+use normalnet_mesh::outliers::{OutlierParams, denoise_around, outlier_vertices, without_vertices};
+use normalnet_mesh::{Mesh, write_mesh};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -247,6 +254,14 @@ pub struct Args {
     /// Print timings, parameters (and metrics) as JSON on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Drop the outlier vertices (far outside the mesh's robust extent, or
+    /// isolated spikes; see `normalnet info`) and every face using one
+    /// before denoising: the output then has fewer vertices and faces (the
+    /// rest in their order; with --gt the same vertices and faces are
+    /// dropped from the ground truth). Without it, every method keeps them
+    /// and their faces in place and denoises the rest around them.
+    #[arg(long)]
+    pub remove_outliers: bool,
 }
 
 /// The classical parameters or NormalNet options chosen by the flags.
@@ -453,6 +468,40 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
     Ok(chosen)
 }
 
+/// What `--remove-outliers` dropped.
+struct Removed {
+    /// one flag per input vertex (len #V of the file)
+    mask: Vec<bool>,
+    /// vertices dropped
+    vertices: usize,
+    /// faces dropped
+    faces: usize,
+}
+
+/// `mesh` without its outlier vertices and their faces (`--remove-outliers`),
+/// said on stderr; unchanged (and `None`) when there is none or no face
+/// would be left.
+fn remove_outliers(mesh: Mesh) -> (Mesh, Option<Removed>) {
+    let outliers = outlier_vertices(&mesh, &OutlierParams::default());
+    if outliers.count() == 0 {
+        return (mesh, None);
+    }
+    let Some((inner, _)) = without_vertices(&mesh, &outliers.mask) else {
+        eprintln!("warning: --remove-outliers: no face would be left; the mesh is kept whole");
+        return (mesh, None);
+    };
+    let removed = Removed {
+        vertices: mesh.num_vertices() - inner.num_vertices(),
+        faces: mesh.num_faces() - inner.num_faces(),
+        mask: outliers.mask,
+    };
+    eprintln!(
+        "--remove-outliers: dropped {} vertices and {} faces",
+        removed.vertices, removed.faces
+    );
+    (inner, Some(removed))
+}
+
 /// Runs `normalnet denoise`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let t_total = Instant::now();
@@ -460,10 +509,31 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     output::check_file(&args.output, output::MESH, "output mesh")?;
     let mesh =
         read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
+    let (mesh, removed) = if args.remove_outliers {
+        remove_outliers(mesh)
+    } else {
+        (mesh, None)
+    };
     let gt: Option<Mesh> = match &args.gt {
         Some(path) => {
             let gt = read_mesh(path)
                 .with_context(|| format!("reading ground truth {}", path.display()))?;
+            let gt = match &removed {
+                Some(r) if gt.num_vertices() == r.mask.len() => without_vertices(&gt, &r.mask)
+                    .map(|(m, _)| m)
+                    .with_context(|| {
+                        format!("{}: no face left without the outliers", path.display())
+                    })?,
+                Some(r) => bail!(
+                    "{}: {} vertices, but {} had {}; --remove-outliers drops the same vertices \
+                     from the ground truth and needs the same vertex count",
+                    path.display(),
+                    gt.num_vertices(),
+                    args.input.display(),
+                    r.mask.len()
+                ),
+                None => gt,
+            };
             if gt.num_faces() != mesh.num_faces() {
                 bail!(
                     "{}: {} faces, but {} has {}; metrics compare face by face",
@@ -482,8 +552,12 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let mut stages = None;
     let (result, parameters) = match &chosen {
         Chosen::Normalnet(options) => {
-            let (out, times) = denoise_normalnet::denoise_with_stages(&mesh, options, &progress)?;
-            stages = Some(times);
+            // outliers and their faces stay in place, as for the classical methods
+            let out = denoise_around(&mesh, |m| {
+                let (out, times) = denoise_normalnet::denoise_with_stages(m, options, &progress)?;
+                stages = Some(times);
+                anyhow::Ok(out)
+            })?;
             let parameters = json!({
                 "model": options.model,
                 "iterations": options.iterations,
@@ -535,6 +609,10 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             "stages": stages,
             "gt": args.gt,
             "metrics": metrics,
+            "removed_outliers": removed.as_ref().map(|r| json!({
+                "vertices": r.vertices,
+                "faces": r.faces,
+            })),
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {

@@ -4,8 +4,9 @@
 //! twice in the same direction (inconsistent orientation), degenerate and
 //! duplicate faces, unreferenced vertices.
 
+use crate::input::read_mesh_as;
 use anyhow::Context;
-use normalnet_mesh::io::{Format, read_mesh_as};
+use normalnet_mesh::io::Format;
 use normalnet_mesh::validate::validate;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -78,6 +79,7 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     println!("  degenerate faces       {}", r.degenerate_faces);
     println!("  duplicate faces        {}", r.duplicate_faces);
     println!("  unreferenced vertices  {}", r.unreferenced_vertices);
+    println!("  outlier vertices       {}", r.outlier_vertices);
     println!("  read in                {:.3} s", load);
     for w in r.warnings() {
         println!("warning: {w}");

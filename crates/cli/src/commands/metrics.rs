@@ -3,9 +3,10 @@
 //! `shared/tools/eval/metrics.py`).
 
 use super::info::{format_for, parse_format};
+use crate::input::read_mesh_as;
 use crate::progress::Bar;
 use anyhow::Context;
-use normalnet_mesh::io::{Format, read_mesh_as};
+use normalnet_mesh::io::Format;
 use normalnet_mesh::metrics::compare_with_progress;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -105,6 +106,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         "  degenerate result faces      {}",
         m.degenerate_faces_result
     );
+    println!("  flipped faces (n_r.n_g < 0)  {}", m.flipped_faces);
     println!(
         "  time                         {:.3} s metrics, {:.3} s total",
         metrics_seconds,

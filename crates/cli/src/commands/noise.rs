@@ -3,8 +3,9 @@
 //! along the clean vertex normals or random directions, seeded.
 
 use super::info::{format_for, parse_format};
+use crate::input::read_mesh_as;
 use anyhow::Context;
-use normalnet_mesh::io::{Format, WriteOptions, read_mesh_as, write_mesh_as};
+use normalnet_mesh::io::{Format, WriteOptions, write_mesh_as};
 use normalnet_mesh::noise::{NoiseDirection, NoiseParams, add_noise_with_info};
 use std::path::PathBuf;
 

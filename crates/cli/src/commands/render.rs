@@ -83,7 +83,7 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let start = Instant::now();
     crate::output::check_file(&args.out, crate::output::PNG, "picture")?;
-    let mesh = normalnet_mesh::read_mesh(&args.mesh)?;
+    let mesh = crate::input::read_mesh(&args.mesh)?;
     let mut options = RenderOptions {
         width: args.size.0,
         height: args.size.1,
@@ -108,7 +108,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let mut lines = vec![args.title.clone().unwrap_or(name)];
     let mut bar = None;
     if let Some(gt_path) = &args.gt {
-        let gt = normalnet_mesh::read_mesh(gt_path)?;
+        let gt = crate::input::read_mesh(gt_path)?;
         let errors = per_face_angle_errors(&gt, &mesh).with_context(|| {
             format!(
                 "comparing {} with {}",

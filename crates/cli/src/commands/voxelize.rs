@@ -3,9 +3,9 @@
 //! y = mean-normal direction, W = local z) or a PNG picture (three
 //! orthographic views of the occupied cubes coloured by normal).
 
+use crate::input::read_mesh;
 use anyhow::{Context, bail};
 use normalnet_mesh::Topology;
-use normalnet_mesh::io::read_mesh;
 use normalnet_voxel::inspect::{grid_picture, write_npy, write_png};
 use normalnet_voxel::{Scratch, VoxelParams, Voxelizer};
 use std::path::PathBuf;

@@ -1,0 +1,162 @@
+//! Issue 14, end to end: a stray vertex is reported by `info` (text and
+//! JSON) and warned about by every command that reads the mesh; the
+//! classical methods and NormalNet keep it in place; `--remove-outliers`
+//! drops it and its faces; `metrics --json` reports flipped faces.
+
+use normalnet_mesh::{Mesh, read_mesh, write_mesh};
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn normalnet(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_normalnet"))
+        .env_remove("NORMALNET_MODEL")
+        .args(args)
+        .output()
+        .expect("normalnet runs")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// A bumpy UV sphere (rings × segs) with vertex `stray` moved to 1e30.
+fn sphere_with_stray(stray: Option<usize>) -> Mesh {
+    let (rings, segs) = (10, 20);
+    let mut p = vec![[0.0, 0.0, 1.0]];
+    for i in 1..rings {
+        let th = std::f64::consts::PI * i as f64 / rings as f64;
+        for j in 0..segs {
+            let ph = 2.0 * std::f64::consts::PI * j as f64 / segs as f64;
+            let r = 1.0 + 0.03 * ((7 * i + 13 * j) % 5) as f64;
+            p.push([
+                r * th.sin() * ph.cos(),
+                r * th.sin() * ph.sin(),
+                r * th.cos(),
+            ]);
+        }
+    }
+    p.push([0.0, 0.0, -1.0]);
+    let last = (p.len() - 1) as u32;
+    let id = |i: usize, j: usize| (1 + (i - 1) * segs + j % segs) as u32;
+    let mut f = Vec::new();
+    for j in 0..segs {
+        f.push([0, id(1, j), id(1, j + 1)]);
+        f.push([last, id(rings - 1, j + 1), id(rings - 1, j)]);
+    }
+    for i in 1..rings - 1 {
+        for j in 0..segs {
+            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    if let Some(v) = stray {
+        p[v] = [1e30, 0.0, 0.0];
+    }
+    Mesh::new(p, f).unwrap()
+}
+
+#[test]
+fn issue_14_info_and_every_reader_warn_about_a_stray_vertex() {
+    let dir = tempfile::tempdir().unwrap();
+    let stray = dir.path().join("stray.obj");
+    let clean = dir.path().join("clean.obj");
+    write_mesh(&stray, &sphere_with_stray(Some(57))).unwrap();
+    write_mesh(&clean, &sphere_with_stray(None)).unwrap();
+
+    let o = normalnet(&["info", "--json", s(&stray)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["report"]["outlier_vertices"], 1, "{v}");
+    let o = normalnet(&["info", s(&stray)]);
+    assert!(text(&o.stdout).contains("outlier vertices       1"));
+    assert!(text(&o.stderr).contains("vertex 57"), "{}", text(&o.stderr));
+    let o = normalnet(&["info", "--json", s(&clean)]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["report"]["outlier_vertices"], 0);
+    assert!(!text(&o.stderr).contains("outlier"), "{}", text(&o.stderr));
+
+    let out = dir.path().join("out.obj");
+    let noisy = dir.path().join("noisy.obj");
+    let png = dir.path().join("r.png");
+    for args in [
+        vec!["denoise", "-q", "-m", "bnf", s(&stray), s(&out)],
+        vec!["metrics", s(&clean), s(&stray)],
+        vec!["noise", "--seed", "1", s(&stray), s(&noisy)],
+        vec!["render", "--size", "64x64", s(&stray), "--out", s(&png)],
+    ] {
+        let o = normalnet(&args);
+        let err = text(&o.stderr);
+        assert!(
+            err.contains("warning:") && err.contains("1 outlier vertex"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn issue_14_denoise_keeps_or_removes_the_stray_vertex() {
+    let dir = tempfile::tempdir().unwrap();
+    let stray = dir.path().join("stray.obj");
+    let clean = dir.path().join("clean.obj");
+    let mesh = sphere_with_stray(Some(57));
+    write_mesh(&stray, &mesh).unwrap();
+    write_mesh(&clean, &sphere_with_stray(None)).unwrap();
+    let out = dir.path().join("out.obj");
+    for method in ["gnf", "sun07", "l0"] {
+        let o = normalnet(&["denoise", "-q", "-m", method, s(&stray), s(&out)]);
+        assert!(o.status.success(), "{method}: {}", text(&o.stderr));
+        let r = read_mesh(&out).unwrap();
+        assert_eq!(r.positions[57], [1e30, 0.0, 0.0], "{method}");
+        let far = r
+            .positions
+            .iter()
+            .enumerate()
+            .filter(|(i, p)| *i != 57 && p.iter().any(|c| c.abs() > 2.0))
+            .count();
+        assert_eq!(far, 0, "{method}: vertices dragged away");
+    }
+    let o = normalnet(&[
+        "denoise",
+        "-q",
+        "-m",
+        "gnf",
+        "--remove-outliers",
+        "--json",
+        "--gt",
+        s(&clean),
+        s(&stray),
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["removed_outliers"]["vertices"], 1, "{v}");
+    let faces_of_57 = mesh.faces.iter().filter(|t| t.contains(&57)).count();
+    assert_eq!(v["removed_outliers"]["faces"], faces_of_57);
+    let r = read_mesh(&out).unwrap();
+    assert_eq!(r.num_vertices(), mesh.num_vertices() - 1);
+    assert_eq!(r.num_faces(), mesh.num_faces() - faces_of_57);
+    assert!(v["metrics"]["flipped_faces"].is_u64(), "{v}");
+    assert!(v["metrics"]["e_v_over_le"].as_f64().unwrap() < 1.0, "{v}");
+}
+
+#[test]
+fn issue_14_metrics_json_counts_flipped_faces() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = dir.path().join("clean.obj");
+    let flipped = dir.path().join("flipped.obj");
+    let mesh = sphere_with_stray(None);
+    write_mesh(&clean, &mesh).unwrap();
+    let mut f = mesh.faces.clone();
+    for t in f.iter_mut().take(3) {
+        t.swap(1, 2);
+    }
+    write_mesh(&flipped, &Mesh::new(mesh.positions.clone(), f).unwrap()).unwrap();
+    let o = normalnet(&["metrics", "--json", s(&clean), s(&flipped)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["flipped_faces"], 3, "{v}");
+}
