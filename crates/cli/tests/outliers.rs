@@ -160,3 +160,22 @@ fn issue_14_metrics_json_counts_flipped_faces() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["flipped_faces"], 3, "{v}");
 }
+
+#[test]
+fn issue_14_no_fold_guard_switches_the_guard_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.obj");
+    let out = dir.path().join("out.obj");
+    write_mesh(&input, &sphere_with_stray(None)).unwrap();
+    for (flag, expected) in [(None, true), (Some("--no-fold-guard"), false)] {
+        let mut args = vec!["denoise", "-q", "-m", "gnf", "--json", s(&input), s(&out)];
+        args.extend(flag);
+        let o = normalnet(&args);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["parameters"]["fold_guard"], expected, "{v}");
+    }
+    let o = normalnet(&["denoise", "-m", "l0", "--no-fold-guard", s(&input), s(&out)]);
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("--no-fold-guard does not apply to --method l0"));
+}

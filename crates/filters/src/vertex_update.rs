@@ -53,7 +53,7 @@ pub const FOLD_GUARD_COS: f64 = 0.5;
 pub const FOLD_GUARD_HALVINGS: u8 = 3;
 
 /// Reusable scratch for [`vertex_update_in_place`]: face centroids, the
-/// next positions and the fold guard's steps, halvings and folded flags.
+/// next positions and the fold guard's floors, steps and halvings.
 /// Build once per mesh size; no allocation per pass.
 #[derive(Clone, Debug, Default)]
 pub struct VertexUpdateBuffers {
@@ -61,7 +61,6 @@ pub struct VertexUpdateBuffers {
     next: Vec<Vec3>,
     steps: Vec<Vec3>,
     halvings: Vec<u8>,
-    folded: Vec<bool>,
     floors: Vec<f64>,
 }
 
@@ -238,8 +237,10 @@ fn facing(p: &[Vec3], t: &[u32; 3], n: Vec3) -> f64 {
 }
 
 /// The fold guard of one pass (module docs): shortens the proposed moves
-/// `buffers.next` from `positions` until no face folds against its
-/// filtered normal.
+/// `buffers.next` from `positions` until no face falls below its floor.
+/// The first round tests every face; later rounds only the faces around
+/// the vertices the previous round moved (a face none of whose vertices
+/// moved keeps its verdict, and every folded face has a vertex that moves).
 fn guard_folds(
     positions: &[Vec3],
     faces: &[[u32; 3]],
@@ -247,66 +248,64 @@ fn guard_folds(
     normals: &[Vec3],
     buffers: &mut VertexUpdateBuffers,
 ) {
+    let floors: &[f64] = &buffers.floors;
+    let is_folded = |next: &[Vec3], f: usize| facing(next, &faces[f], normals[f]) < floors[f];
+    let next: &[Vec3] = &buffers.next;
+    let mut folded: Vec<u32> = (0..faces.len() as u32)
+        .into_par_iter()
+        .with_min_len(1024)
+        .filter(|&f| is_folded(next, f as usize))
+        .collect();
+    if folded.is_empty() {
+        return;
+    }
     let n_v = positions.len();
-    buffers.folded.resize(faces.len(), false);
     buffers.halvings.clear();
     buffers.halvings.resize(n_v, 0);
     buffers.steps.resize(n_v, [0.0; 3]);
-    let mut steps_saved = false;
-    loop {
+    buffers
+        .steps
+        .par_iter_mut()
+        .zip(buffers.next.par_iter().zip(positions.par_iter()))
+        .with_min_len(1024)
+        .for_each(|(s, (&x, &p))| *s = sub(x, p));
+    let mut vertices: Vec<u32> = Vec::new();
+    let mut active: Vec<u32> = Vec::new();
+    while !folded.is_empty() {
+        // Halve the steps of the vertices of folded faces (each once).
+        vertices.clear();
+        vertices.extend(folded.iter().flat_map(|&f| faces[f as usize]));
+        vertices.sort_unstable();
+        vertices.dedup();
+        vertices.retain(|&v| buffers.halvings[v as usize] <= FOLD_GUARD_HALVINGS);
+        for &v in &vertices {
+            let v = v as usize;
+            let h = &mut buffers.halvings[v];
+            *h += 1;
+            buffers.next[v] = if *h > FOLD_GUARD_HALVINGS {
+                positions[v]
+            } else {
+                vec3::add(
+                    positions[v],
+                    vec3::scale(buffers.steps[v], 0.5f64.powi(*h as i32)),
+                )
+            };
+        }
+        // Re-test the faces around them.
+        active.clear();
+        for &v in &vertices {
+            active.extend_from_slice(topology.vertex_faces.row(v as usize));
+        }
+        active.sort_unstable();
+        active.dedup();
         let next: &[Vec3] = &buffers.next;
-        let floors: &[f64] = &buffers.floors;
-        let any = buffers
-            .folded
-            .par_iter_mut()
-            .zip(
-                faces
-                    .par_iter()
-                    .zip(normals.par_iter().zip(floors.par_iter())),
-            )
-            .with_min_len(1024)
-            .map(|(folded, (t, (&n, &floor)))| {
-                *folded = facing(next, t, n) < floor;
-                *folded
-            })
-            .reduce(|| false, |a, b| a || b);
-        if !any {
-            return;
-        }
-        if !steps_saved {
-            buffers
-                .steps
-                .par_iter_mut()
-                .zip(buffers.next.par_iter().zip(positions.par_iter()))
-                .with_min_len(1024)
-                .for_each(|(s, (&x, &p))| *s = sub(x, p));
-            steps_saved = true;
-        }
-        let folded: &[bool] = &buffers.folded;
-        let steps: &[Vec3] = &buffers.steps;
-        buffers
-            .next
-            .par_iter_mut()
-            .zip(buffers.halvings.par_iter_mut())
-            .enumerate()
-            .with_min_len(1024)
-            .for_each(|(i, (x, h))| {
-                if *h > FOLD_GUARD_HALVINGS
-                    || !topology
-                        .vertex_faces
-                        .row(i)
-                        .iter()
-                        .any(|&f| folded[f as usize])
-                {
-                    return;
-                }
-                *h += 1;
-                *x = if *h > FOLD_GUARD_HALVINGS {
-                    positions[i]
-                } else {
-                    vec3::add(positions[i], vec3::scale(steps[i], 0.5f64.powi(*h as i32)))
-                };
-            });
+        folded.clear();
+        folded.extend(
+            active
+                .iter()
+                .copied()
+                .filter(|&f| is_folded(next, f as usize)),
+        );
     }
 }
 

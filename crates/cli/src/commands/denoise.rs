@@ -262,6 +262,11 @@ pub struct Args {
     /// and their faces in place and denoises the rest around them.
     #[arg(long)]
     pub remove_outliers: bool,
+    /// Switch off the fold guard of the vertex update (gnf, bnf, sun07, bi,
+    /// vt; on by default: a vertex move may not fold a face over against its
+    /// filtered normal). Off reproduces the reference implementations.
+    #[arg(long)]
+    pub no_fold_guard: bool,
 }
 
 /// The classical parameters or NormalNet options chosen by the flags.
@@ -273,7 +278,7 @@ enum Chosen {
 
 /// Rejects flags that the chosen method does not use.
 fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
-    let given: [(&str, bool); 18] = [
+    let given: [(&str, bool); 19] = [
         ("iterations", args.iterations.is_some()),
         ("vertex-iterations", args.vertex_iterations.is_some()),
         ("mu-g", args.mu_g.is_some()),
@@ -292,6 +297,7 @@ fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
         ("alpha-decay", args.alpha_decay.is_some()),
         ("model", args.model.is_some()),
         ("guided-from", args.guided_from.is_some()),
+        ("no-fold-guard", args.no_fold_guard),
     ];
     for (flag, present) in given {
         if present && !used.contains(&flag) {
@@ -362,6 +368,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
                     "mu-g",
                     "sigma-s",
                     "radius",
+                    "no-fold-guard",
                 ],
             )?;
             let mut p = GnfParams::default();
@@ -370,6 +377,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
             set(&mut p.mu_g, args.mu_g);
             set(&mut p.sigma_s_over_ds, args.sigma_s);
             set(&mut p.radius_over_ds, args.radius);
+            p.fold_guard &= !args.no_fold_guard;
             Chosen::Classical(Method::Gnf(p))
         }
         MethodName::GtGnf => {
@@ -391,21 +399,37 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
         MethodName::Bnf => {
             reject_unused(
                 args,
-                &["iterations", "vertex-iterations", "sigma-s", "sigma-r"],
+                &[
+                    "iterations",
+                    "vertex-iterations",
+                    "sigma-s",
+                    "sigma-r",
+                    "no-fold-guard",
+                ],
             )?;
             let mut p = BnfParams::default();
             set(&mut p.normal_iterations, args.iterations);
             set(&mut p.vertex_iterations, args.vertex_iterations);
             set(&mut p.sigma_s_over_ds, args.sigma_s);
             set(&mut p.sigma_r, args.sigma_r);
+            p.fold_guard &= !args.no_fold_guard;
             Chosen::Classical(Method::Bnf(p))
         }
         MethodName::Sun07 => {
-            reject_unused(args, &["iterations", "vertex-iterations", "threshold"])?;
+            reject_unused(
+                args,
+                &[
+                    "iterations",
+                    "vertex-iterations",
+                    "threshold",
+                    "no-fold-guard",
+                ],
+            )?;
             let mut p = Sun07Params::default();
             set(&mut p.normal_iterations, args.iterations);
             set(&mut p.vertex_iterations, args.vertex_iterations);
             set(&mut p.threshold, args.threshold);
+            p.fold_guard &= !args.no_fold_guard;
             Chosen::Classical(Method::Sun07(p))
         }
         MethodName::L0 => {
@@ -438,6 +462,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
                     "sigma-s",
                     "sigma-r",
                     "sigma-n",
+                    "no-fold-guard",
                 ],
             )?;
             let mut p = BiParams::default();
@@ -446,12 +471,20 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
             set(&mut p.sigma_s_over_ds, args.sigma_s);
             set(&mut p.sigma_r, args.sigma_r);
             set(&mut p.sigma_n, args.sigma_n);
+            p.fold_guard &= !args.no_fold_guard;
             Chosen::Classical(Method::Bi(p))
         }
         MethodName::Vt => {
             reject_unused(
                 args,
-                &["iterations", "vertex-iterations", "radius", "rho", "tau"],
+                &[
+                    "iterations",
+                    "vertex-iterations",
+                    "radius",
+                    "rho",
+                    "tau",
+                    "no-fold-guard",
+                ],
             )?;
             let mut p = VtParams::default();
             set(&mut p.normal_iterations, args.iterations);
@@ -459,6 +492,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
             set(&mut p.radius_over_le, args.radius);
             set(&mut p.rho, args.rho);
             set(&mut p.tau, args.tau);
+            p.fold_guard &= !args.no_fold_guard;
             Chosen::Classical(Method::Vt(p))
         }
     };
