@@ -1,67 +1,186 @@
-//! `Bar`: the indicatif implementation of `normalnet_mesh::Progress`, silent
-//! with `--quiet` or when stderr is not a terminal.
+//! `Bar`: the `normalnet_mesh::Progress` of every command. On a terminal an
+//! indicatif bar with ETA; when stderr is not a terminal (a log under nohup,
+//! a pipe) plain lines with position, ETA and the last message at most every
+//! [`LINE_SECONDS`]; nothing with `--quiet`.
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressStyle};
 use normalnet_mesh::Progress;
 use std::io::IsTerminal;
 use std::sync::Mutex;
+use std::time::Instant;
 
-/// A progress bar on stderr, or nothing when hidden.
+/// Seconds between two plain progress lines.
+pub const LINE_SECONDS: f64 = 10.0;
+
+/// Where progress goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    Hidden,
+    Terminal,
+    Lines,
+}
+
+/// The task being reported in [`Mode::Lines`].
+#[derive(Default)]
+struct LineTask {
+    label: String,
+    total: u64,
+    pos: u64,
+    message: String,
+    started: Option<Instant>,
+    printed: Option<Instant>,
+}
+
+/// Progress on stderr: a bar, plain lines, or nothing.
 pub struct Bar {
-    hidden: bool,
+    mode: Mode,
+    created: Instant,
     bar: Mutex<Option<ProgressBar>>,
+    line: Mutex<LineTask>,
 }
 
 impl Bar {
-    /// A bar that draws only when `!quiet` and stderr is a terminal.
+    /// A bar on a terminal, plain lines elsewhere, nothing when `quiet`.
     pub fn new(quiet: bool) -> Bar {
+        let mode = if quiet {
+            Mode::Hidden
+        } else if std::io::stderr().is_terminal() {
+            Mode::Terminal
+        } else {
+            Mode::Lines
+        };
         Bar {
-            hidden: quiet || !std::io::stderr().is_terminal(),
+            mode,
+            created: Instant::now(),
             bar: Mutex::new(None),
+            line: Mutex::new(LineTask::default()),
         }
+    }
+
+    fn print_line(&self, task: &LineTask, done: bool) {
+        let now = self.created.elapsed().as_secs_f64();
+        let spent = task.started.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        let state = if done {
+            format!("done in {spent:.0} s")
+        } else if task.total > 0 {
+            let pct = 100.0 * task.pos as f64 / task.total as f64;
+            let eta = if task.pos > 0 {
+                format!(
+                    "ETA {:.0} s",
+                    spent / task.pos as f64 * task.total.saturating_sub(task.pos) as f64
+                )
+            } else {
+                "ETA ?".into()
+            };
+            format!("{}/{} ({pct:.0}%) {eta}", task.pos, task.total)
+        } else {
+            format!("{}", task.pos)
+        };
+        let sep = if task.message.is_empty() { "" } else { " · " };
+        eprintln!(
+            "[{now:>6.0} s] {}: {state}{sep}{}",
+            task.label, task.message
+        );
+    }
+
+    /// Prints the current line when the last one is old enough.
+    fn maybe_print(&self, task: &mut LineTask) {
+        if task
+            .printed
+            .is_none_or(|t| t.elapsed().as_secs_f64() >= LINE_SECONDS)
+        {
+            self.print_line(task, false);
+            task.printed = Some(Instant::now());
+        }
+    }
+
+    fn line(&self) -> std::sync::MutexGuard<'_, LineTask> {
+        self.line.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn bar(&self) -> std::sync::MutexGuard<'_, Option<ProgressBar>> {
+        self.bar.lock().unwrap_or_else(|e| e.into_inner())
     }
 }
 
 impl Progress for Bar {
     fn start(&self, label: &str, total: u64) {
-        let bar = if self.hidden {
-            ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden())
-        } else {
-            ProgressBar::new(total)
-        };
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{prefix:>12} [{bar:30}] {pos}/{len} {elapsed_precise} {msg}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
-        bar.set_prefix(label.to_string());
-        if let Some(old) = self
-            .bar
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .replace(bar)
-        {
-            old.finish_and_clear();
+        match self.mode {
+            Mode::Hidden => {}
+            Mode::Terminal => {
+                let bar = ProgressBar::new(total);
+                bar.set_style(
+                    ProgressStyle::with_template(
+                        "{prefix:>12} [{bar:30}] {pos}/{len} {elapsed_precise} ETA {eta} {msg}",
+                    )
+                    .unwrap_or_else(|_| ProgressStyle::default_bar())
+                    .progress_chars("=> "),
+                );
+                bar.set_prefix(label.to_string());
+                if let Some(old) = self.bar().replace(bar) {
+                    old.finish_and_clear();
+                }
+            }
+            Mode::Lines => {
+                let mut task = self.line();
+                *task = LineTask {
+                    label: label.to_string(),
+                    total,
+                    started: Some(Instant::now()),
+                    ..LineTask::default()
+                };
+                self.maybe_print(&mut task);
+            }
         }
     }
 
     fn advance(&self, n: u64) {
-        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
-            b.inc(n);
+        match self.mode {
+            Mode::Hidden => {}
+            Mode::Terminal => {
+                if let Some(b) = self.bar().as_ref() {
+                    b.inc(n);
+                }
+            }
+            Mode::Lines => {
+                let mut task = self.line();
+                task.pos += n;
+                self.maybe_print(&mut task);
+            }
         }
     }
 
     fn message(&self, text: &str) {
-        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
-            b.set_message(text.to_string());
+        match self.mode {
+            Mode::Hidden => {}
+            Mode::Terminal => {
+                if let Some(b) = self.bar().as_ref() {
+                    b.set_message(text.to_string());
+                }
+            }
+            Mode::Lines => {
+                let mut task = self.line();
+                task.message = text.to_string();
+                self.maybe_print(&mut task);
+            }
         }
     }
 
     fn finish(&self) {
-        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
-            b.finish_and_clear();
+        match self.mode {
+            Mode::Hidden => {}
+            Mode::Terminal => {
+                if let Some(b) = self.bar().take() {
+                    b.finish_and_clear();
+                }
+            }
+            Mode::Lines => {
+                let mut task = self.line();
+                if task.started.is_some() {
+                    self.print_line(&task, true);
+                }
+                *task = LineTask::default();
+            }
         }
     }
 }

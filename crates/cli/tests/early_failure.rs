@@ -277,3 +277,22 @@ fn issue_14_interrupt_removes_temporary_files() {
     assert!(!leftover.exists(), "the temporary file was left behind");
     assert!(!out.exists());
 }
+
+#[test]
+fn issue_14_progress_is_printed_as_lines_when_stderr_is_not_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("sphere.obj");
+    write_mesh(&input, &sphere(12, 16)).unwrap();
+    let out = dir.path().join("out.obj");
+    // stderr is a pipe here: plain lines with position and ETA, then "done"
+    let o = normalnet(&["denoise", s(&input), s(&out), "-m", "gnf"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("ETA"), "{err}");
+    assert!(err.contains("done in"), "{err}");
+    // --quiet silences them
+    let o = normalnet(&["denoise", s(&input), s(&out), "-m", "gnf", "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(!err.contains("ETA") && !err.contains("done in"), "{err}");
+}

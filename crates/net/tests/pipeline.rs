@@ -114,3 +114,105 @@ fn test_models_are_refused_as_training_sources() {
     let err = config.validate(std::path::Path::new("x.toml")).unwrap_err();
     assert!(err.to_string().contains("Fandisk0.3"), "{err}");
 }
+
+#[test]
+fn a_run_continues_a_bundle_and_counts_its_samples() {
+    let first = tempfile::tempdir().unwrap();
+    let shape = |seed: u64, regen: bool| SourceSpec {
+        mesh: format!("shape:{seed}"),
+        gaussian: vec![0.4],
+        impulsive: vec![],
+        regen,
+    };
+    let config = TrainConfig {
+        preset: "tiny".into(),
+        batch: 8,
+        lr: 1e-3,
+        steps: [2, 2, 2, 2, 2, 2],
+        validate_every: 2,
+        validation_faces: 8,
+        shape_faces: 120,
+        workers: 1,
+        residual_from: 3,
+        voxel_scale: 1.5,
+        sources: vec![shape(1, true), shape(2, false)],
+        validation: vec![shape(1001, false)],
+        ..TrainConfig::default()
+    };
+    let base = train(&config, first.path(), false, &NoProgress).unwrap();
+    // κ is recorded as the grid's α_c
+    let tiny = normalnet_voxel::VoxelParams::tiny();
+    assert!((base.voxel.alpha_c - tiny.alpha_c / 1.5).abs() < 1e-12);
+
+    let second = tempfile::tempdir().unwrap();
+    let more = TrainConfig {
+        seed: 2,
+        steps: [3, 1, 1, 1, 1, 1],
+        init_from: first.path().to_string_lossy().into_owned(),
+        ..config.clone()
+    };
+    let continued = train(&more, second.path(), false, &NoProgress).unwrap();
+    for (k, (a, b)) in base.networks.iter().zip(&continued.networks).enumerate() {
+        assert_eq!(
+            b.samples_seen,
+            a.samples_seen + more.steps[k] * more.batch,
+            "network {}",
+            k + 1
+        );
+        assert_eq!(a.residual, b.residual);
+    }
+    assert!(
+        continued
+            .training
+            .notes
+            .contains("continued from the bundle")
+    );
+
+    // a bundle of another residual form or voxel grid is refused before any training
+    let third = tempfile::tempdir().unwrap();
+    let other_form = TrainConfig {
+        residual_from: 2,
+        ..more.clone()
+    };
+    let err = train(&other_form, third.path(), false, &NoProgress).unwrap_err();
+    assert!(err.to_string().contains("residual"), "{err}");
+    let other_grid = TrainConfig {
+        voxel_scale: 1.0,
+        ..more
+    };
+    let err = train(&other_grid, third.path(), false, &NoProgress).unwrap_err();
+    assert!(err.to_string().contains("voxel grid"), "{err}");
+    assert!(!third.path().join("net1.bpk").exists());
+
+    // the continued bundle denoises in both output forms, with the fold guard
+    let bundle = Bundle::load(second.path(), &normalnet_net::cpu_device()).unwrap();
+    let mesh = normalnet_voxel::shapes::generate_seeded(7, 150).unwrap();
+    for guided_from in [0, 1] {
+        let params = DenoiseParams {
+            iterations: 2,
+            vertex_iterations: 5,
+            guided_from,
+            fold_guard: true,
+            ..DenoiseParams::default()
+        };
+        let (out, _) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();
+        assert!(out.positions.iter().flatten().all(|x| x.is_finite()));
+        assert_ne!(out.positions, mesh.positions);
+    }
+}
+
+#[test]
+fn a_non_positive_voxel_scale_is_refused() {
+    let config = TrainConfig {
+        voxel_scale: 0.0,
+        sources: vec![SourceSpec {
+            mesh: "shape:1".into(),
+            gaussian: vec![0.3],
+            impulsive: vec![],
+            regen: false,
+        }],
+        ..TrainConfig::default()
+    };
+    let err = config.validate(std::path::Path::new("x.toml")).unwrap_err();
+    assert!(err.to_string().contains("voxel_scale"), "{err}");
+}

@@ -83,3 +83,34 @@ fn trained_network_is_nearly_rotation_equivariant() {
         "rotating the mesh changes the outputs by {mean:.2}° on average (the pass itself moves normals by {moved:.2}°)"
     );
 }
+
+/// The fold guard (on by default) on the shipped example: no more folded
+/// faces than without it, and E_a no worse beyond noise.
+#[test]
+fn the_fold_guard_folds_no_more_faces_on_the_example() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let path = root.join("models/lite");
+    if !path.join("manifest.toml").is_file() {
+        println!("SKIP: no shipped bundle at {}", path.display());
+        return;
+    }
+    let bundle = Bundle::load(&path, &cpu_device()).unwrap();
+    let noisy = normalnet_mesh::read_mesh(root.join("examples/noisy-part.obj")).unwrap();
+    let clean = normalnet_mesh::read_mesh(root.join("examples/clean-part.obj")).unwrap();
+    let run = |fold_guard| {
+        let params = normalnet_net::DenoiseParams {
+            iterations: 4,
+            fold_guard,
+            ..normalnet_net::DenoiseParams::default()
+        };
+        let (out, _) = normalnet_net::denoise(&noisy, &bundle, &params, &NoProgress).unwrap();
+        normalnet_mesh::metrics::compare(&clean, &out).unwrap()
+    };
+    let (plain, guarded) = (run(false), run(true));
+    println!(
+        "fold guard off: E_a {:.3}°, {} flipped; on: E_a {:.3}°, {} flipped",
+        plain.e_a_deg, plain.flipped_faces, guarded.e_a_deg, guarded.flipped_faces
+    );
+    assert!(guarded.flipped_faces <= plain.flipped_faces);
+    assert!(guarded.e_a_deg <= plain.e_a_deg + 0.1);
+}

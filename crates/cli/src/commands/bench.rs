@@ -303,12 +303,13 @@ impl Settings {
                         )
                     }
                     "model" => options.model = Some(PathBuf::from(v.as_str().with_context(bad)?)),
+                    "fold_guard" => options.fold_guard = Some(v.as_bool().with_context(bad)?),
                     "guided_from" => {
                         options.guided_from =
                             Some(v.as_integer().filter(|i| *i >= 0).with_context(bad)? as usize)
                     }
                     _ => bail!(
-                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided_from)"
+                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided_from, fold_guard)"
                     ),
                 }
             }
@@ -336,6 +337,9 @@ impl Settings {
         }
         if let Some(g) = options.guided_from {
             parts.push(format!("guided_from={g}"));
+        }
+        if let Some(g) = options.fold_guard {
+            parts.push(format!("fold_guard={g}"));
         }
         Ok((options, parts.join(" ")))
     }

@@ -262,9 +262,10 @@ pub struct Args {
     /// and their faces in place and denoises the rest around them.
     #[arg(long)]
     pub remove_outliers: bool,
-    /// Switch off the fold guard of the vertex update (gnf, bnf, sun07, bi,
-    /// vt; on by default: a vertex move may not fold a face over against its
-    /// filtered normal). Off reproduces the reference implementations.
+    /// Switch off the fold guard of the vertex update (normalnet, gnf, bnf,
+    /// sun07, bi, vt; on by default: a vertex move may not fold a face over
+    /// against its filtered normal). Off reproduces the reference
+    /// implementations and the paper's NormalNet pipeline.
     #[arg(long)]
     pub no_fold_guard: bool,
 }
@@ -354,6 +355,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
                 vertex_iterations: args.vertex_iterations,
                 mu_g: args.mu_g,
                 guided_from: args.guided_from,
+                fold_guard: args.no_fold_guard.then_some(false),
             };
             // the ranges, before the bundle and the mesh are loaded
             denoise_normalnet::params(&options).validate()?;

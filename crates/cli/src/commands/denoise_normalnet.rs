@@ -28,6 +28,8 @@ pub struct NormalnetOptions {
     pub mu_g: Option<f64>,
     /// guided form from this iteration on, 0 = never (`--guided-from`)
     pub guided_from: Option<usize>,
+    /// the fold guard of the vertex update (`--no-fold-guard` turns it off)
+    pub fold_guard: Option<bool>,
 }
 
 /// The bundle folder to use: `--model`, else `$NORMALNET_MODEL`, else
@@ -51,6 +53,7 @@ pub fn params(options: &NormalnetOptions) -> DenoiseParams {
         mu_g: options.mu_g.unwrap_or(d.mu_g),
         batch: d.batch,
         guided_from: options.guided_from.unwrap_or(d.guided_from),
+        fold_guard: options.fold_guard.unwrap_or(d.fold_guard),
     }
 }
 

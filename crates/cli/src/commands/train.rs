@@ -2,12 +2,8 @@
 //! scheme of the paper (§4, SPEC §8); see `normalnet_net::training`.
 
 use anyhow::Context;
-use normalnet_mesh::Progress;
 use normalnet_net::training::{TrainConfig, train};
-use std::io::IsTerminal;
 use std::path::PathBuf;
-use std::sync::Mutex;
-use std::time::Instant;
 
 /// Arguments of `normalnet train`.
 #[derive(clap::Args)]
@@ -38,9 +34,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     crate::output::check_dir(&args.out)?;
     let bar = crate::progress::Bar::new(quiet);
-    let log = LogLines::new(quiet || std::io::stderr().is_terminal());
-    let both = Both(&bar, &log);
-    let manifest = train(&config, &args.out, args.resume, &both)
+    let manifest = train(&config, &args.out, args.resume, &bar)
         .with_context(|| format!("training into {}", args.out.display()))?;
     println!("bundle written to {}", args.out.display());
     for n in &manifest.networks {
@@ -55,64 +49,4 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-/// Progress as plain lines on stderr at most every 15 s (for logs written
-/// under nohup, where the bar is hidden).
-struct LogLines {
-    off: bool,
-    last: Mutex<Option<Instant>>,
-    start: Instant,
-}
-
-impl LogLines {
-    fn new(off: bool) -> LogLines {
-        LogLines {
-            off,
-            last: Mutex::new(None),
-            start: Instant::now(),
-        }
-    }
-}
-
-impl Progress for LogLines {
-    fn start(&self, label: &str, total: u64) {
-        if !self.off {
-            eprintln!(
-                "[{:>6.0} s] {label}: {total} steps",
-                self.start.elapsed().as_secs_f64()
-            );
-        }
-    }
-    fn message(&self, text: &str) {
-        if self.off {
-            return;
-        }
-        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
-        if last.is_none_or(|t| t.elapsed().as_secs_f64() >= 15.0) {
-            eprintln!("[{:>6.0} s] {text}", self.start.elapsed().as_secs_f64());
-            *last = Some(Instant::now());
-        }
-    }
-}
-
-struct Both<'a>(&'a dyn Progress, &'a dyn Progress);
-
-impl Progress for Both<'_> {
-    fn start(&self, label: &str, total: u64) {
-        self.0.start(label, total);
-        self.1.start(label, total);
-    }
-    fn advance(&self, n: u64) {
-        self.0.advance(n);
-        self.1.advance(n);
-    }
-    fn message(&self, text: &str) {
-        self.0.message(text);
-        self.1.message(text);
-    }
-    fn finish(&self) {
-        self.0.finish();
-        self.1.finish();
-    }
 }
