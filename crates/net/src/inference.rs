@@ -44,10 +44,12 @@ pub struct DenoiseParams {
     /// outputs this is the oracle.
     pub guided_from: usize,
     /// the fold guard of the shared vertex update
-    /// (`normalnet_filters::vertex_update`, cone [`FOLD_GUARD_COS`]); on by
-    /// default: on the validation meshes it lowered E_a on every one
-    /// (e.g. 8.88° → 6.97° on a cylinder at noise 0.5, 10.23° → 9.84° on homer)
+    /// (`normalnet_filters::vertex_update`) with cone `fold_guard_cos`
     pub fold_guard: bool,
+    /// the guard's cone: a face may not turn beyond `acos(fold_guard_cos)`
+    /// of its filtered normal (default [`FOLD_GUARD_COS`], 60°; 0 = only
+    /// the flip itself is refused)
+    pub fold_guard_cos: f64,
 }
 
 impl Default for DenoiseParams {
@@ -59,6 +61,7 @@ impl Default for DenoiseParams {
             batch: 256,
             guided_from: 0,
             fold_guard: true,
+            fold_guard_cos: FOLD_GUARD_COS,
         }
     }
 }
@@ -170,7 +173,7 @@ pub fn denoise(
             &VertexUpdate {
                 iterations: params.vertex_iterations,
                 fixed: None,
-                fold_guard: params.fold_guard.then_some(FOLD_GUARD_COS),
+                fold_guard: params.fold_guard.then_some(params.fold_guard_cos),
             },
             &mut buffers,
         );

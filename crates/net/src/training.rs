@@ -666,8 +666,9 @@ pub fn train(
             config.lr_decay_steps
         ),
         regeneration: format!(
-            "M_(k+1) from network k at μ_g {REGEN_MU_G}, N_v {REGEN_VERTEX_ITERATIONS}: CNN on {} (regen = true), oracle GT-guided GNF pass (μ_g 0.4, σ_s 2·d_s) on the others and on the validation meshes",
-            pairs.iter().filter(|p| p.regen).map(|p| p.name.as_str()).collect::<Vec<_>>().join("; ")
+            "M_(k+1) from network k at μ_g {REGEN_MU_G}, N_v {REGEN_VERTEX_ITERATIONS}: CNN on {} (regen = true), oracle GT-guided GNF pass (μ_g 0.4, σ_s 2·d_s) on {}",
+            names(pairs.iter().chain(&val_pairs).filter(|p| p.regen)),
+            names(pairs.iter().chain(&val_pairs).filter(|p| !p.regen))
         ),
         notes: format!(
             "{}steps per network {:?}, wall-clock limits {:?} s, warm start {}, validation = mean angle (deg) of the μ_g 0.35 output vs its target on {} balanced faces (yaw 0); last sample pool {} faces; total run {:.0} s",
@@ -682,6 +683,16 @@ pub fn train(
     manifest.write(&out.join(MANIFEST))?;
     crate::plot::loss_curve_png(&log_path, &out.join("loss.png"))?;
     Ok(manifest)
+}
+
+/// The pairs' names joined for the manifest ("none" when there are none).
+fn names<'a>(pairs: impl Iterator<Item = &'a Pair>) -> String {
+    let list: Vec<&str> = pairs.map(|p| p.name.as_str()).collect();
+    if list.is_empty() {
+        "none".into()
+    } else {
+        list.join("; ")
+    }
 }
 
 /// The bundle `init_from` names, checked against the run: same preset, the

@@ -304,12 +304,20 @@ impl Settings {
                     }
                     "model" => options.model = Some(PathBuf::from(v.as_str().with_context(bad)?)),
                     "fold_guard" => options.fold_guard = Some(v.as_bool().with_context(bad)?),
+                    "fold_guard_cos" => {
+                        options.fold_guard_cos = Some(
+                            v.as_float()
+                                .or_else(|| v.as_integer().map(|i| i as f64))
+                                .filter(|c| (-1.0..=1.0).contains(c))
+                                .with_context(bad)?,
+                        )
+                    }
                     "guided_from" => {
                         options.guided_from =
                             Some(v.as_integer().filter(|i| *i >= 0).with_context(bad)? as usize)
                     }
                     _ => bail!(
-                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided_from, fold_guard)"
+                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided_from, fold_guard, fold_guard_cos)"
                     ),
                 }
             }
@@ -340,6 +348,9 @@ impl Settings {
         }
         if let Some(g) = options.fold_guard {
             parts.push(format!("fold_guard={g}"));
+        }
+        if let Some(c) = options.fold_guard_cos {
+            parts.push(format!("fold_guard_cos={c}"));
         }
         Ok((options, parts.join(" ")))
     }

@@ -356,6 +356,7 @@ fn choose(args: &Args) -> anyhow::Result<Chosen> {
                 mu_g: args.mu_g,
                 guided_from: args.guided_from,
                 fold_guard: args.no_fold_guard.then_some(false),
+                fold_guard_cos: None,
             };
             // the ranges, before the bundle and the mesh are loaded
             denoise_normalnet::params(&options).validate()?;

@@ -30,6 +30,8 @@ pub struct NormalnetOptions {
     pub guided_from: Option<usize>,
     /// the fold guard of the vertex update (`--no-fold-guard` turns it off)
     pub fold_guard: Option<bool>,
+    /// the guard's cone, cos of the largest turn (bench key `fold_guard_cos`)
+    pub fold_guard_cos: Option<f64>,
 }
 
 /// The bundle folder to use: `--model`, else `$NORMALNET_MODEL`, else
@@ -54,6 +56,7 @@ pub fn params(options: &NormalnetOptions) -> DenoiseParams {
         batch: d.batch,
         guided_from: options.guided_from.unwrap_or(d.guided_from),
         fold_guard: options.fold_guard.unwrap_or(d.fold_guard),
+        fold_guard_cos: options.fold_guard_cos.unwrap_or(d.fold_guard_cos),
     }
 }
 
