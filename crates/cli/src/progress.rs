@@ -1,7 +1,9 @@
 //! `Bar`: the `normalnet_mesh::Progress` of every command. On a terminal an
 //! indicatif bar with ETA; when stderr is not a terminal (a log under nohup,
-//! a pipe) plain lines with position, ETA and the last message at most every
-//! [`LINE_SECONDS`]; nothing with `--quiet`.
+//! a pipe) plain lines with position, ETA and the last message every
+//! [`LINE_SECONDS`] (`NORMALNET_PROGRESS_SECONDS` overrides it), the first
+//! one only once a task has run that long, so quick commands stay silent;
+//! nothing with `--quiet`.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use normalnet_mesh::Progress;
@@ -9,8 +11,11 @@ use std::io::IsTerminal;
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// Seconds between two plain progress lines.
+/// Seconds between two plain progress lines (and before the first).
 pub const LINE_SECONDS: f64 = 10.0;
+
+/// Environment variable overriding [`LINE_SECONDS`].
+pub const LINE_SECONDS_ENV: &str = "NORMALNET_PROGRESS_SECONDS";
 
 /// Where progress goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -34,6 +39,7 @@ struct LineTask {
 /// Progress on stderr: a bar, plain lines, or nothing.
 pub struct Bar {
     mode: Mode,
+    every: f64,
     created: Instant,
     bar: Mutex<Option<ProgressBar>>,
     line: Mutex<LineTask>,
@@ -49,8 +55,14 @@ impl Bar {
         } else {
             Mode::Lines
         };
+        let every = std::env::var(LINE_SECONDS_ENV)
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|v| v.is_finite() && *v >= 0.0)
+            .unwrap_or(LINE_SECONDS);
         Bar {
             mode,
+            every,
             created: Instant::now(),
             bar: Mutex::new(None),
             line: Mutex::new(LineTask::default()),
@@ -83,12 +95,11 @@ impl Bar {
         );
     }
 
-    /// Prints the current line when the last one is old enough.
+    /// Prints the current line when the last one (or the task's start) is
+    /// old enough.
     fn maybe_print(&self, task: &mut LineTask) {
-        if task
-            .printed
-            .is_none_or(|t| t.elapsed().as_secs_f64() >= LINE_SECONDS)
-        {
+        let since = task.printed.or(task.started);
+        if since.is_none_or(|t| t.elapsed().as_secs_f64() >= self.every) {
             self.print_line(task, false);
             task.printed = Some(Instant::now());
         }
@@ -176,7 +187,7 @@ impl Progress for Bar {
             }
             Mode::Lines => {
                 let mut task = self.line();
-                if task.started.is_some() {
+                if task.printed.is_some() {
                     self.print_line(&task, true);
                 }
                 *task = LineTask::default();

@@ -284,14 +284,27 @@ fn issue_14_progress_is_printed_as_lines_when_stderr_is_not_a_terminal() {
     let input = dir.path().join("sphere.obj");
     write_mesh(&input, &sphere(12, 16)).unwrap();
     let out = dir.path().join("out.obj");
-    // stderr is a pipe here: plain lines with position and ETA, then "done"
+    // a quick run prints no progress lines at the default rate (one per 10 s)
     let o = normalnet(&["denoise", s(&input), s(&out), "-m", "gnf"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(!err.contains("ETA") && !err.contains("done in"), "{err}");
+    // stderr is a pipe here: plain lines with position and ETA, then "done"
+    let o = Command::new(env!("CARGO_BIN_EXE_normalnet"))
+        .env("NORMALNET_PROGRESS_SECONDS", "0")
+        .args(["denoise", s(&input), s(&out), "-m", "gnf"])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(err.contains("ETA"), "{err}");
     assert!(err.contains("done in"), "{err}");
     // --quiet silences them
-    let o = normalnet(&["denoise", s(&input), s(&out), "-m", "gnf", "--quiet"]);
+    let o = Command::new(env!("CARGO_BIN_EXE_normalnet"))
+        .env("NORMALNET_PROGRESS_SECONDS", "0")
+        .args(["denoise", s(&input), s(&out), "-m", "gnf", "--quiet"])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(!err.contains("ETA") && !err.contains("done in"), "{err}");
