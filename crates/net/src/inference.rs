@@ -44,12 +44,10 @@ pub struct DenoiseParams {
     /// outputs this is the oracle.
     pub guided_from: usize,
     /// the fold guard of the shared vertex update
-    /// (`normalnet_filters::vertex_update`) with cone `fold_guard_cos`
-    pub fold_guard: bool,
-    /// the guard's cone: a face may not turn beyond `acos(fold_guard_cos)`
-    /// of its filtered normal (default [`FOLD_GUARD_COS`], 60°; 0 = only
-    /// the flip itself is refused)
-    pub fold_guard_cos: f64,
+    /// (`normalnet_filters::vertex_update`): `Some(cos)` keeps a face within
+    /// `acos(cos)` of its filtered normal (default [`FOLD_GUARD_COS`], 60°;
+    /// `Some(0.0)` refuses only the flip itself), `None` switches it off
+    pub fold_guard: Option<f64>,
 }
 
 impl Default for DenoiseParams {
@@ -60,8 +58,7 @@ impl Default for DenoiseParams {
             mu_g: 0.35,
             batch: 256,
             guided_from: 0,
-            fold_guard: true,
-            fold_guard_cos: FOLD_GUARD_COS,
+            fold_guard: Some(FOLD_GUARD_COS),
         }
     }
 }
@@ -173,7 +170,7 @@ pub fn denoise(
             &VertexUpdate {
                 iterations: params.vertex_iterations,
                 fixed: None,
-                fold_guard: params.fold_guard.then_some(params.fold_guard_cos),
+                fold_guard: params.fold_guard,
             },
             &mut buffers,
         );

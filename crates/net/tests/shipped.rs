@@ -97,10 +97,10 @@ fn the_fold_guard_folds_no_more_faces_on_the_example() {
     let bundle = Bundle::load(&path, &cpu_device()).unwrap();
     let noisy = normalnet_mesh::read_mesh(root.join("examples/noisy-part.obj")).unwrap();
     let clean = normalnet_mesh::read_mesh(root.join("examples/clean-part.obj")).unwrap();
-    let run = |fold_guard| {
+    let run = |fold_guard: bool| {
         let params = normalnet_net::DenoiseParams {
             iterations: 4,
-            fold_guard,
+            fold_guard: fold_guard.then_some(normalnet_filters::FOLD_GUARD_COS),
             ..normalnet_net::DenoiseParams::default()
         };
         let (out, _) = normalnet_net::denoise(&noisy, &bundle, &params, &NoProgress).unwrap();

@@ -55,8 +55,11 @@ pub fn params(options: &NormalnetOptions) -> DenoiseParams {
         mu_g: options.mu_g.unwrap_or(d.mu_g),
         batch: d.batch,
         guided_from: options.guided_from.unwrap_or(d.guided_from),
-        fold_guard: options.fold_guard.unwrap_or(d.fold_guard),
-        fold_guard_cos: options.fold_guard_cos.unwrap_or(d.fold_guard_cos),
+        fold_guard: match (options.fold_guard, options.fold_guard_cos) {
+            (Some(false), _) => None,
+            (_, Some(cos)) => Some(cos),
+            _ => d.fold_guard,
+        },
     }
 }
 
