@@ -41,6 +41,9 @@ enum Command {
     Bench(commands::bench::Args),
     /// Render a mesh to PNG (optionally coloured by error against GT).
     Render(commands::render::Args),
+    /// Describe a NormalNet model bundle (the built-in one by default), or
+    /// convert an old one.
+    Models(commands::models::Args),
 }
 
 fn main() {
@@ -75,6 +78,7 @@ fn main() {
         Command::Dataset(a) => commands::dataset::run(a, quiet),
         Command::Train(a) => commands::train::run(a, quiet),
         Command::Render(a) => commands::render::run(a, quiet),
+        Command::Models(a) => commands::models::run(a, quiet),
     };
     if let Err(e) = result {
         eprintln!("error: {}", error_chain(&e));

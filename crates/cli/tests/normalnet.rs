@@ -74,6 +74,81 @@ fn shipped_bundle_denoises_a_small_mesh() {
     );
 }
 
+/// Issue 11: the default model travels with the binary. A copy of the
+/// binary in an empty folder, run from there, denoises with the built-in
+/// bundle and describes it; the built-in bundle is the shipped folder.
+#[test]
+fn the_default_model_is_built_into_the_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = noisy_shape(dir.path());
+    let bin = dir.path().join("normalnet-copy");
+    std::fs::copy(env!("CARGO_BIN_EXE_normalnet"), &bin).unwrap();
+    let run = |args: &[&str]| {
+        let mut c = Command::new(&bin);
+        c.env_remove("NORMALNET_MODEL")
+            .current_dir(dir.path())
+            .args(args);
+        c.output().unwrap()
+    };
+    let o = run(&["denoise", "-q", "--iterations", "1", "noisy.obj", "out.obj"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.path().join("out.obj").is_file());
+    let o = run(&["models"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("<built-in models/lite>") && text.contains("preset      lite"),
+        "{text}"
+    );
+    assert_eq!(
+        text.lines().filter(|l| l.contains("°")).count(),
+        6,
+        "{text}"
+    );
+    let o = run(&["models", "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lite/manifest.toml");
+    let shipped: toml::Value = toml::from_str(&std::fs::read_to_string(shipped).unwrap()).unwrap();
+    assert_eq!(json["format"].as_i64(), shipped["format"].as_integer());
+    assert_eq!(
+        json["code_version"].as_str(),
+        shipped["code_version"].as_str()
+    );
+    let _ = input;
+}
+
+/// A format-1 bundle (burn records) is refused before any work, with the
+/// command that converts it.
+#[test]
+fn a_format_1_bundle_names_the_conversion() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = noisy_shape(dir.path());
+    let old = dir.path().join("old-bundle");
+    std::fs::create_dir_all(&old).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lite/manifest.toml");
+    let text = std::fs::read_to_string(shipped).unwrap();
+    std::fs::write(
+        old.join("manifest.toml"),
+        text.replace("format = 2", "format = 1"),
+    )
+    .unwrap();
+    let output = dir.path().join("out.obj");
+    let o = normalnet()
+        .args(["denoise", "-q", "--model"])
+        .arg(&old)
+        .arg(&input)
+        .arg(&output)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("format 1") && e.contains("normalnet models convert"),
+        "{e}"
+    );
+    assert!(!output.exists());
+}
+
 #[test]
 fn a_missing_bundle_is_named_in_the_error() {
     let dir = tempfile::tempdir().unwrap();

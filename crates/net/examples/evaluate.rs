@@ -7,7 +7,7 @@
 
 use normalnet_filters::{GnfParams, gnf};
 use normalnet_mesh::{NoProgress, compare, read_mesh};
-use normalnet_net::{Bundle, DenoiseParams, cpu_device, denoise};
+use normalnet_net::{Bundle, DenoiseParams, denoise};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -15,7 +15,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if a.len() < 7 {
         return Err("usage: evaluate BUNDLE NOISY CLEAN N_f N_v MU_G [skip-gnf]".into());
     }
-    let bundle = Bundle::load(&a[1], &cpu_device())?;
+    let bundle = Bundle::load(&a[1])?;
     let noisy = read_mesh(&a[2])?;
     let clean = read_mesh(&a[3])?;
     let (n_f, n_v, mu_g): (usize, usize, f64) = (a[4].parse()?, a[5].parse()?, a[6].parse()?);

@@ -1,20 +1,25 @@
 //! Model bundles (SPEC §8): a folder with the six networks of one preset
-//! (`net1.bpk` … `net6.bpk`, burnpack files from `Module::save_file`) and a
-//! `manifest.toml` saying what they are and how they were trained. Loading
-//! needs only this module and [`crate::model`], not the training code.
+//! (`net1.safetensors` … `net6.safetensors`, see [`crate::weights_file`]) and
+//! a `manifest.toml` saying what they are (architecture, voxel grid) and how
+//! they were trained. Loading needs no deep-learning framework: the networks
+//! are compiled for the CPU engine of `normalnet-cnn` once, when the bundle
+//! loads.
+//!
+//! Format history: 1 (until 2026-11) stored burn records (`net1.bpk`, ...);
+//! `normalnet models convert` (a build with `--features burn`) turns such a
+//! bundle into format 2.
 //!
 //! Network k serves the filtering iterations of [`INTERVALS`]`[k]`:
 //! [1], [2], [3], [4–5], [6–10], [11–N_f] (paper §4).
 
 use std::path::{Path, PathBuf};
 
-use burn::module::Module;
-use burn::tensor::Device;
+use normalnet_cnn::{Cnn, NetWeights};
 use normalnet_voxel::VoxelParams;
 use serde::{Deserialize, Serialize};
 
 use crate::NetError;
-use crate::model::{MU_GS, ModelConfig, NormalNet};
+use crate::arch::{MU_GS, ModelConfig};
 
 /// First and last filtering iteration (1-based) of each network; `usize::MAX`
 /// stands for N_f (open end).
@@ -31,14 +36,14 @@ pub fn network_for_iteration(k: usize) -> usize {
 
 /// File name of network `i` (0-based) inside a bundle.
 pub fn network_file(i: usize) -> String {
-    format!("net{}.bpk", i + 1)
+    format!("net{}.safetensors", i + 1)
 }
 
 /// The manifest file name.
 pub const MANIFEST: &str = "manifest.toml";
 
 /// Version of the manifest layout written by this code.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// What a bundle is and how it was made (`manifest.toml`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -131,6 +136,14 @@ impl Manifest {
             path: path.to_path_buf(),
             message,
         };
+        if self.format == 1 {
+            return Err(bad(format!(
+                "format 1 (burn records, net1.bpk ...); this program reads format \
+                 {FORMAT_VERSION} (safetensors). Convert it once with `normalnet models convert \
+                 {} NEW_DIR` from a build with `--features burn`",
+                path.parent().unwrap_or(Path::new(".")).display()
+            )));
+        }
         if self.format != FORMAT_VERSION {
             return Err(bad(format!(
                 "format {} (this program reads {FORMAT_VERSION})",
@@ -183,7 +196,12 @@ impl Manifest {
     /// Reads and validates `manifest.toml`.
     pub fn read(path: &Path) -> Result<Manifest, NetError> {
         let text = std::fs::read_to_string(path).map_err(|e| NetError::io(path, e))?;
-        let manifest: Manifest = toml::from_str(&text).map_err(|e| NetError::BadManifest {
+        Manifest::parse(&text, path)
+    }
+
+    /// Parses and validates manifest text; `path` names it in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Manifest, NetError> {
+        let manifest: Manifest = toml::from_str(text).map_err(|e| NetError::BadManifest {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
@@ -204,25 +222,25 @@ impl Manifest {
 /// Six loaded networks and their manifest, ready for inference.
 #[derive(Debug, Clone)]
 pub struct Bundle {
-    /// where it was loaded from
+    /// where it was loaded from (`<built-in ...>` for the embedded model)
     pub path: PathBuf,
     /// what it is
     pub manifest: Manifest,
-    /// the six networks, in interval order (inference mode)
-    pub networks: Vec<NormalNet>,
-    /// the device the networks live on
-    pub device: Device,
+    /// the six networks' weights, in interval order
+    pub networks: Vec<NetWeights>,
+    /// the same networks compiled for the CPU engine (inference mode)
+    pub engines: Vec<Cnn>,
 }
 
 impl Bundle {
-    /// Loads the bundle in folder `path` onto `device` (use a plain, non-autodiff
-    /// device: batch norm then uses its running statistics).
+    /// Loads the bundle in folder `path`.
     ///
     /// # Errors
     /// [`NetError::MissingFile`] for a missing manifest or weight file,
-    /// [`NetError::BadManifest`] for an unreadable or inconsistent manifest,
+    /// [`NetError::BadManifest`] for an unreadable or inconsistent manifest
+    /// (format 1 included, with the command that converts it),
     /// [`NetError::WeightMismatch`] when a weight file does not fit the preset.
-    pub fn load(path: impl AsRef<Path>, device: &Device) -> Result<Bundle, NetError> {
+    pub fn load(path: impl AsRef<Path>) -> Result<Bundle, NetError> {
         let path = path.as_ref();
         if !path.is_dir() {
             return Err(NetError::MissingFile {
@@ -257,18 +275,79 @@ impl Bundle {
                     file: info.file.clone(),
                 });
             }
-            networks.push(load_network(
+            networks.push(crate::weights_file::load(
                 &manifest.model,
                 &manifest.preset,
                 &file,
-                device,
             )?);
         }
+        Bundle::from_parts(path.to_path_buf(), manifest, networks)
+    }
+
+    /// A bundle from a manifest (`manifest.toml` text) and the six weight
+    /// files' bytes held in memory; `label` names it in messages.
+    pub fn from_bytes(label: &str, manifest: &str, files: &[&[u8]]) -> Result<Bundle, NetError> {
+        let path = PathBuf::from(label);
+        let manifest = Manifest::parse(manifest, &path.join(MANIFEST))?;
+        if files.len() != manifest.networks.len() {
+            return Err(NetError::BadManifest {
+                path: path.join(MANIFEST),
+                message: format!(
+                    "{} weight files for {} networks",
+                    files.len(),
+                    manifest.networks.len()
+                ),
+            });
+        }
+        let mut networks = Vec::with_capacity(files.len());
+        for (info, bytes) in manifest.networks.iter().zip(files) {
+            let w = crate::weights_file::from_bytes(&manifest.model, bytes).map_err(|message| {
+                NetError::WeightMismatch {
+                    path: path.join(&info.file),
+                    preset: manifest.preset.clone(),
+                    message,
+                }
+            })?;
+            networks.push(w);
+        }
+        Bundle::from_parts(path, manifest, networks)
+    }
+
+    /// A bundle of weights already in memory (checked against the manifest's
+    /// architecture and compiled).
+    pub fn from_parts(
+        path: PathBuf,
+        manifest: Manifest,
+        networks: Vec<NetWeights>,
+    ) -> Result<Bundle, NetError> {
+        let mut engines = Vec::with_capacity(networks.len());
+        for (info, w) in manifest.networks.iter().zip(&networks) {
+            let mismatch = |message: String| NetError::WeightMismatch {
+                path: path.join(&info.file),
+                preset: manifest.preset.clone(),
+                message,
+            };
+            if w.grid != manifest.model.grid {
+                return Err(mismatch(format!(
+                    "grid {} for a {}-grid network",
+                    w.grid, manifest.model.grid
+                )));
+            }
+            let cnn = Cnn::new(w).map_err(|e| mismatch(e.to_string()))?;
+            if cnn.outputs() != manifest.model.outputs {
+                return Err(mismatch(format!(
+                    "{} outputs, the manifest says {}",
+                    cnn.outputs(),
+                    manifest.model.outputs
+                )));
+            }
+            engines.push(cnn);
+        }
         Ok(Bundle {
-            path: path.to_path_buf(),
+            path,
             manifest,
             networks,
-            device: device.clone(),
+            engines,
         })
     }
 
@@ -294,38 +373,6 @@ pub fn nearest_mu_g(mu_gs: &[f64], mu_g: f64) -> usize {
     best
 }
 
-/// Loads one network's weights from `file` into a fresh `config` network.
-pub fn load_network(
-    config: &ModelConfig,
-    preset: &str,
-    file: &Path,
-    device: &Device,
-) -> Result<NormalNet, NetError> {
-    config
-        .init(device, 0)
-        .try_load_file(file)
-        .map(|m| m.valid())
-        .map_err(|e| NetError::WeightMismatch {
-            path: file.to_path_buf(),
-            preset: preset.to_string(),
-            message: e.to_string(),
-        })
-}
-
-/// Saves one network to `file` (burnpack), atomically.
-pub fn save_network(model: &NormalNet, file: &Path) -> Result<(), NetError> {
-    let tmp = file.with_extension("bpk.tmp");
-    model
-        .clone()
-        .valid()
-        .save_file(&tmp)
-        .map_err(|e| NetError::Record {
-            path: tmp.clone(),
-            message: e.to_string(),
-        })?;
-    std::fs::rename(&tmp, file).map_err(|e| NetError::io(file, e))
-}
-
 /// Writes `bytes` to `path` through a temporary file and a rename.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), NetError> {
     let tmp = path.with_extension("tmp~");
@@ -338,11 +385,11 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), NetError> {
 pub fn save_bundle(
     dir: &Path,
     manifest: &Manifest,
-    networks: &[NormalNet],
+    networks: &[NetWeights],
 ) -> Result<(), NetError> {
     std::fs::create_dir_all(dir).map_err(|e| NetError::io(dir, e))?;
     for (i, net) in networks.iter().enumerate() {
-        save_network(net, &dir.join(&manifest.networks[i].file))?;
+        crate::weights_file::save(net, &dir.join(&manifest.networks[i].file))?;
     }
     manifest.write(&dir.join(MANIFEST))
 }
@@ -400,10 +447,9 @@ mod tests {
     use super::*;
 
     fn tiny_bundle(dir: &Path) -> Manifest {
-        let device = Device::flex();
         let manifest = new_manifest("tiny").unwrap();
-        let nets: Vec<NormalNet> = (0..6)
-            .map(|i| ModelConfig::tiny().init(&device, i as u64))
+        let nets: Vec<NetWeights> = (0..6)
+            .map(|i| ModelConfig::tiny().init_weights(i as u64))
             .collect();
         save_bundle(dir, &manifest, &nets).unwrap();
         manifest
@@ -432,25 +478,46 @@ mod tests {
     fn save_and_load_round_trip() {
         let dir = tempfile::tempdir().unwrap();
         let manifest = tiny_bundle(dir.path());
-        let bundle = Bundle::load(dir.path(), &Device::flex()).unwrap();
+        let bundle = Bundle::load(dir.path()).unwrap();
         assert_eq!(bundle.manifest, manifest);
         assert_eq!(bundle.networks.len(), 6);
+        assert_eq!(bundle.networks[3], ModelConfig::tiny().init_weights(3));
+        // the same from bytes in memory
+        let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+        let files: Vec<Vec<u8>> = (0..6).map(|i| read(&network_file(i))).collect();
+        let refs: Vec<&[u8]> = files.iter().map(|f| f.as_slice()).collect();
+        let text = std::fs::read_to_string(dir.path().join(MANIFEST)).unwrap();
+        let from_bytes = Bundle::from_bytes("<memory>", &text, &refs).unwrap();
+        assert_eq!(from_bytes.networks, bundle.networks);
+    }
+
+    #[test]
+    fn format_1_bundles_get_the_conversion_command() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut manifest = tiny_bundle(dir.path());
+        manifest.format = 1;
+        manifest.write(&dir.path().join(MANIFEST)).unwrap();
+        let err = Bundle::load(dir.path()).unwrap_err().to_string();
+        assert!(
+            err.contains("format 1") && err.contains("normalnet models convert"),
+            "{err}"
+        );
     }
 
     #[test]
     fn missing_files_are_named() {
         let dir = tempfile::tempdir().unwrap();
         tiny_bundle(dir.path());
-        std::fs::remove_file(dir.path().join("net4.bpk")).unwrap();
-        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        std::fs::remove_file(dir.path().join("net4.safetensors")).unwrap();
+        let err = Bundle::load(dir.path()).unwrap_err();
         assert!(
-            matches!(err, NetError::MissingFile { ref file, .. } if file == "net4.bpk"),
+            matches!(err, NetError::MissingFile { ref file, .. } if file == "net4.safetensors"),
             "{err}"
         );
-        let err = Bundle::load(dir.path().join("nope"), &Device::flex()).unwrap_err();
+        let err = Bundle::load(dir.path().join("nope")).unwrap_err();
         assert!(matches!(err, NetError::MissingFile { .. }), "{err}");
         std::fs::remove_file(dir.path().join(MANIFEST)).unwrap();
-        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        let err = Bundle::load(dir.path()).unwrap_err();
         assert!(err.to_string().contains("manifest.toml"), "{err}");
     }
 
@@ -463,9 +530,9 @@ mod tests {
         manifest.model = ModelConfig::lite();
         manifest.voxel = VoxelParams::lite();
         manifest.write(&dir.path().join(MANIFEST)).unwrap();
-        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        let err = Bundle::load(dir.path()).unwrap_err();
         assert!(matches!(err, NetError::WeightMismatch { .. }), "{err}");
-        assert!(err.to_string().contains("net1.bpk"), "{err}");
+        assert!(err.to_string().contains("net1.safetensors"), "{err}");
     }
 
     #[test]
@@ -475,18 +542,18 @@ mod tests {
         let path = dir.path().join(MANIFEST);
         std::fs::write(&path, "preset = [").unwrap();
         assert!(matches!(
-            Bundle::load(dir.path(), &Device::flex()),
+            Bundle::load(dir.path()),
             Err(NetError::BadManifest { .. })
         ));
         let mut m = manifest.clone();
         m.voxel = VoxelParams::lite();
         m.write(&path).unwrap();
-        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        let err = Bundle::load(dir.path()).unwrap_err();
         assert!(err.to_string().contains("grid side"), "{err}");
         let mut m = manifest;
         m.networks.pop();
         m.write(&path).unwrap();
-        let err = Bundle::load(dir.path(), &Device::flex()).unwrap_err();
+        let err = Bundle::load(dir.path()).unwrap_err();
         assert!(err.to_string().contains("5 networks"), "{err}");
     }
 }

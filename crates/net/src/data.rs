@@ -3,6 +3,7 @@
 //! D = H = W = 2·T_s+1), a target is 18 f32 (six local-frame 3-vectors, μ_g
 //! order of [`crate::MU_GS`]).
 
+#[cfg(feature = "burn")]
 use burn::tensor::{Device, Tensor, TensorData};
 
 /// A batch of samples as flat buffers: `grids` holds `len` grids back to
@@ -26,7 +27,7 @@ impl SampleBatch {
             side,
             len: 0,
             grids: Vec::with_capacity(capacity * grid_len(side)),
-            targets: Vec::with_capacity(capacity * crate::model::NUM_OUTPUTS),
+            targets: Vec::with_capacity(capacity * crate::arch::NUM_OUTPUTS),
         }
     }
 
@@ -56,7 +57,7 @@ impl SampleBatch {
             }
             b.grids.extend(g);
             b.targets
-                .extend((0..crate::model::NUM_OUTPUTS).map(|_| rng.random_range(-0.8f32..0.8)));
+                .extend((0..crate::arch::NUM_OUTPUTS).map(|_| rng.random_range(-0.8f32..0.8)));
         }
         b.len = len;
         b
@@ -68,13 +69,15 @@ impl SampleBatch {
     }
 
     /// The grids as a tensor `[len, 3, D, H, W]` on `device`.
+    #[cfg(feature = "burn")]
     pub fn grids_tensor(&self, device: &Device) -> Tensor<5> {
         grids_tensor(&self.grids, self.len, self.side, device)
     }
 
     /// The targets as a tensor `[len, 18]` on `device`.
+    #[cfg(feature = "burn")]
     pub fn targets_tensor(&self, device: &Device) -> Tensor<2> {
-        let data = TensorData::new(self.targets.clone(), [self.len, crate::model::NUM_OUTPUTS]);
+        let data = TensorData::new(self.targets.clone(), [self.len, crate::arch::NUM_OUTPUTS]);
         Tensor::from_data(data, device)
     }
 }
@@ -84,6 +87,7 @@ pub fn grid_len(side: usize) -> usize {
     3 * side * side * side
 }
 
+#[cfg(feature = "burn")]
 /// `len` grids stored back to back → tensor `[len, 3, side, side, side]`.
 ///
 /// # Panics
@@ -95,6 +99,7 @@ pub fn grids_tensor(grids: &[f32], len: usize, side: usize, device: &Device) -> 
 }
 
 /// A `[len, k]` tensor back to a flat `Vec<f32>`.
+#[cfg(feature = "burn")]
 pub fn tensor_to_vec(t: Tensor<2>) -> Vec<f32> {
     t.into_data()
         .convert::<f32>()

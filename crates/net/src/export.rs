@@ -14,9 +14,7 @@ use crate::model::{ModelConfig, NormalNet};
 #[error("exporting the network to the CPU engine: {0}")]
 pub struct ExportError(pub String);
 
-/// ε of every batch norm in [`NormalNet`] (burn's `BatchNormConfig` default,
-/// which `ModelConfig::init` keeps).
-const BN_EPSILON: f64 = 1e-5;
+use crate::arch::BN_EPSILON;
 
 /// Collects float tensors by their dotted module path.
 #[derive(Default)]

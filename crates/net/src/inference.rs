@@ -12,7 +12,7 @@
 use std::sync::mpsc::sync_channel;
 use std::time::Instant;
 
-use burn::tensor::Device;
+use normalnet_cnn::Cnn;
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_normals};
 use normalnet_filters::{FOLD_GUARD_COS, VertexUpdate, VertexUpdateBuffers, vertex_update_with};
 use normalnet_mesh::geometry::face_normals;
@@ -22,8 +22,8 @@ use normalnet_voxel::{Frame, VoxelParams, Voxelizer};
 use serde::Serialize;
 
 use crate::NetError;
+use crate::arch::NUM_OUTPUTS;
 use crate::bundle::{Bundle, network_for_iteration};
-use crate::model::{NUM_OUTPUTS, NormalNet};
 
 /// Settings of [`denoise`]; `Default` is SPEC §7.
 #[derive(Clone, Debug, PartialEq)]
@@ -140,12 +140,11 @@ pub fn denoise(
         let (normals, t) = filtered_normals(
             &current,
             &topology,
-            &bundle.networks[i],
+            &bundle.engines[i],
             bundle.manifest.networks[i].residual,
             bundle.voxel_params(),
             slot,
             params.batch,
-            &bundle.device,
             None,
             progress,
         )?;
@@ -190,9 +189,7 @@ pub fn denoise(
 ///
 /// `yaws` (one per face, radians) rotates each face's frame about its local
 /// y axis; `None` = no yaw (what [`denoise`] uses). `progress` advances by
-/// one per face. The network runs on the burn-free CPU engine
-/// (`normalnet-cnn`, compiled from `net` per call); `_device` is where `net`
-/// lives and is not needed for that.
+/// one per face. The network runs on the CPU engine of `normalnet-cnn`.
 ///
 /// # Errors
 /// Voxelizer errors (degenerate scale) and [`NetError::NonFiniteOutput`].
@@ -200,26 +197,27 @@ pub fn denoise(
 pub fn filtered_normals(
     mesh: &Mesh,
     topology: &Topology,
-    net: &NormalNet,
+    cnn: &Cnn,
     residual: bool,
     voxel: VoxelParams,
     slot: usize,
     batch: usize,
-    _device: &Device,
     yaws: Option<&[f64]>,
     progress: &dyn Progress,
 ) -> Result<(Vec<Vec3>, StageTimes), NetError> {
     let mut times = StageTimes::default();
     let t = Instant::now();
     let voxelizer = Voxelizer::new(mesh, topology, voxel)?;
-    // Inference runs on the burn-free CPU engine (same outputs as
-    // `net.forward` to ~1e-6, several times faster than burn Flex).
-    let cnn = crate::export::compile_for_grid(net, voxel.side()).map_err(|e| {
-        NetError::InvalidParameter {
+    if cnn.grid_len() != voxel.grid_len() {
+        return Err(NetError::InvalidParameter {
             name: "network",
-            message: e.to_string(),
-        }
-    })?;
+            message: format!(
+                "the network reads grids of {} values, the voxelizer writes {}",
+                cnn.grid_len(),
+                voxel.grid_len()
+            ),
+        });
+    }
     let fallback = face_normals(mesh);
     times.voxelize_s += t.elapsed().as_secs_f64();
     let n = mesh.num_faces();
@@ -331,7 +329,11 @@ mod tests {
         ]
     }
 
-    fn run(mesh: &Mesh, net: &NormalNet, yaws: Option<&[f64]>) -> Vec<Vec3> {
+    fn engine(seed: u64) -> Cnn {
+        Cnn::new(&ModelConfig::tiny().init_weights(seed)).unwrap()
+    }
+
+    fn run(mesh: &Mesh, net: &Cnn, yaws: Option<&[f64]>) -> Vec<Vec3> {
         let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
         filtered_normals(
             mesh,
@@ -341,7 +343,6 @@ mod tests {
             VoxelParams::tiny(),
             2,
             64,
-            &Device::flex(),
             yaws,
             &NoProgress,
         )
@@ -358,7 +359,7 @@ mod tests {
 
     #[test]
     fn outputs_are_unit_and_invariant_to_translation_and_scale() {
-        let net = ModelConfig::tiny().init(&Device::flex(), 7);
+        let net = engine(7);
         let mesh = shape();
         let a = run(&mesh, &net, None);
         assert_eq!(a.len(), mesh.num_faces());
@@ -376,13 +377,13 @@ mod tests {
     #[test]
     fn a_zero_residual_is_the_identity() {
         let config = ModelConfig::tiny();
-        let mut w = crate::export::net_weights(&config.init(&Device::flex(), 4), &config).unwrap();
+        let mut w = config.init_weights(4);
         w.output.weight.fill(0.0);
         w.output.bias.as_mut().unwrap().fill(0.0);
         let mesh = shape();
         let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
         let pass = |w: &normalnet_cnn::NetWeights| {
-            let net = crate::import::normal_net(&config, w, &Device::flex()).unwrap();
+            let net = Cnn::new(w).unwrap();
             let (normals, _) = filtered_normals(
                 &mesh,
                 &topology,
@@ -391,7 +392,6 @@ mod tests {
                 VoxelParams::tiny(),
                 2,
                 64,
-                &Device::flex(),
                 None,
                 &NoProgress,
             )
@@ -421,7 +421,7 @@ mod tests {
     /// network is not yaw-invariant, so without the yaws they would differ.)
     #[test]
     fn rotating_the_mesh_rotates_the_outputs_modulo_the_free_yaw() {
-        let net = ModelConfig::tiny().init(&Device::flex(), 8);
+        let net = engine(8);
         let mesh = shape();
         let r = rotation([0.3, -0.5, 0.8], 1.1);
         let rotated = transform(&mesh, &r, 1.0, [0.0; 3]);
@@ -460,14 +460,13 @@ mod tests {
 
     #[test]
     fn denoise_runs_every_interval_without_nan() {
-        let device = Device::flex();
         let dir = tempfile::tempdir().unwrap();
         let manifest = new_manifest("tiny").unwrap();
-        let nets: Vec<NormalNet> = (0..6)
-            .map(|i| ModelConfig::tiny().init(&device, i))
+        let nets: Vec<normalnet_cnn::NetWeights> = (0..6)
+            .map(|i| ModelConfig::tiny().init_weights(i))
             .collect();
         save_bundle(dir.path(), &manifest, &nets).unwrap();
-        let bundle = Bundle::load(dir.path(), &device).unwrap();
+        let bundle = Bundle::load(dir.path()).unwrap();
         let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
         let params = DenoiseParams {
             iterations: 11,

@@ -1,20 +1,21 @@
 //! The network being trained, on one of two engines: the CPU engine of
 //! `normalnet-cnn` (`Trainer`: sparse first layer, hand-written backward
 //! pass; the default) or burn's autodiff (the reference it was checked
-//! against). Both start from and save to burn [`NormalNet`] files, so
-//! bundles do not depend on the engine.
+//! against; only in a build with the `burn` feature). Both start from and
+//! save plain [`NetWeights`], so bundles do not depend on the engine.
 
 use std::path::Path;
 
-use burn::module::Module;
-use burn::optim::ModuleOptimizer;
-use burn::tensor::Device;
-use normalnet_cnn::{Cnn, Loss, Trainer};
+#[cfg(feature = "burn")]
+use burn::{module::Module, optim::ModuleOptimizer, tensor::Device};
+use normalnet_cnn::{Cnn, Loss, NetWeights, Trainer};
 
 use crate::NetError;
-use crate::bundle::save_network;
+use crate::arch::ModelConfig;
 use crate::data::SampleBatch;
-use crate::model::{ModelConfig, NormalNet};
+#[cfg(feature = "burn")]
+use crate::model::NormalNet;
+#[cfg(feature = "burn")]
 use crate::step::{adam, train_step};
 
 /// Which engine trains.
@@ -22,7 +23,8 @@ use crate::step::{adam, train_step};
 pub enum Engine {
     /// `normalnet_cnn::Trainer` (CPU, f32)
     Cnn,
-    /// burn autodiff on the Flex backend (MSE only)
+    /// burn autodiff on the Flex backend (MSE only; a build with the `burn`
+    /// feature)
     Burn,
 }
 
@@ -35,6 +37,14 @@ impl Engine {
             _ => None,
         }
     }
+
+    /// Whether this build can train with the engine.
+    pub fn available(self) -> bool {
+        match self {
+            Engine::Cnn => true,
+            Engine::Burn => cfg!(feature = "burn"),
+        }
+    }
 }
 
 /// A network being trained and its optimiser state (one learner per
@@ -43,9 +53,9 @@ impl Engine {
 pub(crate) enum Learner {
     Cnn {
         trainer: Box<Trainer>,
-        config: ModelConfig,
         loss: Loss,
     },
+    #[cfg(feature = "burn")]
     Burn {
         model: Option<NormalNet>,
         optim: ModuleOptimizer,
@@ -61,32 +71,36 @@ fn record(path: &Path, e: impl ToString) -> NetError {
 }
 
 impl Learner {
-    /// Starts from `net` (any device).
+    /// Starts from the weights `w` of a `config` network.
     pub(crate) fn new(
         engine: Engine,
-        net: NormalNet,
+        w: &NetWeights,
         config: &ModelConfig,
         loss: Loss,
     ) -> Result<Learner, NetError> {
+        let _ = config;
         Ok(match engine {
-            Engine::Cnn => {
-                let w = crate::export::net_weights(&net.valid(), config)
-                    .map_err(|e| record(Path::new("<model>"), e))?;
-                Learner::Cnn {
-                    trainer: Box::new(
-                        Trainer::new(&w).map_err(|e| record(Path::new("<model>"), e))?,
-                    ),
-                    config: config.clone(),
-                    loss,
-                }
-            }
+            Engine::Cnn => Learner::Cnn {
+                trainer: Box::new(Trainer::new(w).map_err(|e| record(Path::new("<model>"), e))?),
+                loss,
+            },
+            #[cfg(feature = "burn")]
             Engine::Burn => {
+                let net = crate::import::normal_net(config, w, &Device::flex())
+                    .map_err(|e| record(Path::new("<model>"), e))?;
                 let device = Device::flex().autodiff();
                 Learner::Burn {
-                    model: Some(net.valid().fork(&device).train()),
+                    model: Some(net.fork(&device).train()),
                     optim: adam(),
                     device,
                 }
+            }
+            #[cfg(not(feature = "burn"))]
+            Engine::Burn => {
+                return Err(NetError::InvalidParameter {
+                    name: "engine",
+                    message: "this build has no burn engine (build with --features burn)".into(),
+                });
             }
         })
     }
@@ -97,6 +111,7 @@ impl Learner {
             Learner::Cnn { trainer, loss, .. } => trainer
                 .train_step(&batch.grids, &batch.targets, *loss, lr)
                 .map_err(|e| record(Path::new("<batch>"), e)),
+            #[cfg(feature = "burn")]
             Learner::Burn {
                 model,
                 optim,
@@ -110,33 +125,27 @@ impl Learner {
         }
     }
 
-    /// The current network as a burn module (inference mode).
-    pub(crate) fn network(&self) -> Result<NormalNet, NetError> {
+    /// The current network's weights (running statistics for batch norm).
+    pub(crate) fn network(&self, config: &ModelConfig) -> Result<NetWeights, NetError> {
+        let _ = config;
         match self {
-            Learner::Cnn {
-                trainer, config, ..
-            } => crate::import::normal_net(config, &trainer.weights(), &Device::flex())
-                .map_err(|e| record(Path::new("<model>"), e)),
-            Learner::Burn { model, .. } => Ok(model.as_ref().expect("model").valid()),
-        }
-    }
-
-    /// The current network compiled for the CPU inference engine.
-    pub(crate) fn compiled(&self, grid: usize) -> Result<Cnn, NetError> {
-        match self {
-            Learner::Cnn { trainer, .. } => {
-                Cnn::new(&trainer.weights()).map_err(|e| record(Path::new("<model>"), e))
-            }
+            Learner::Cnn { trainer, .. } => Ok(trainer.weights()),
+            #[cfg(feature = "burn")]
             Learner::Burn { model, .. } => {
-                crate::export::compile_for_grid(&model.as_ref().expect("model").valid(), grid)
+                crate::export::net_weights(&model.as_ref().expect("model").valid(), config)
                     .map_err(|e| record(Path::new("<model>"), e))
             }
         }
     }
 
+    /// The current network compiled for the CPU inference engine.
+    pub(crate) fn compiled(&self, config: &ModelConfig) -> Result<Cnn, NetError> {
+        Cnn::new(&self.network(config)?).map_err(|e| record(Path::new("<model>"), e))
+    }
+
     /// Saves the network as a bundle file.
-    pub(crate) fn save(&self, file: &Path) -> Result<(), NetError> {
-        save_network(&self.network()?, file)
+    pub(crate) fn save(&self, file: &Path, config: &ModelConfig) -> Result<(), NetError> {
+        crate::weights_file::save(&self.network(config)?, file)
     }
 
     /// Writes a resumable checkpoint into `dir`.
@@ -145,6 +154,7 @@ impl Learner {
             Learner::Cnn { trainer, .. } => {
                 crate::bundle::write_atomically(&dir.join("trainer.state"), &trainer.state_bytes())
             }
+            #[cfg(feature = "burn")]
             Learner::Burn { model, optim, .. } => {
                 let tmp = dir.join("model.tmp.bpk");
                 model
@@ -163,6 +173,7 @@ impl Learner {
 
     /// Restores a checkpoint of `dir`; false when there is none.
     pub(crate) fn restore(&mut self, dir: &Path, config: &ModelConfig) -> Result<bool, NetError> {
+        let _ = config;
         match self {
             Learner::Cnn { trainer, .. } => {
                 let file = dir.join("trainer.state");
@@ -175,6 +186,7 @@ impl Learner {
                     .map_err(|e| record(&file, e))?;
                 Ok(true)
             }
+            #[cfg(feature = "burn")]
             Learner::Burn {
                 model,
                 optim,

@@ -1,30 +1,41 @@
-//! NormalNet's 3D CNN in burn (Zhao et al. 2019; SPEC §5–8): the network
-//! ([`model`]), batching voxel grids into tensors ([`data`]), model bundles of
-//! six trained networks ([`bundle`]), the denoising pipeline ([`inference`])
-//! and the iterative training scheme ([`training`]). The CLI picks the device
-//! (`Device::flex()` on CPU) and calls [`inference::denoise`] / training.
+//! NormalNet (Zhao et al. 2019; SPEC §5–8) without a deep-learning
+//! framework: the architecture and fresh weights ([`arch`]), weight files
+//! ([`weights_file`], safetensors), model bundles of six trained networks
+//! ([`bundle`]), the denoising pipeline ([`inference`]) and the iterative
+//! training scheme ([`training`]), all running on the CPU engine of
+//! `normalnet-cnn`.
+//!
+//! The feature `burn` adds the same network in burn ([`model`]), its
+//! autodiff training step ([`step`]) and the conversions between the two
+//! ([`export`], [`import`]): the reference the CPU engine is checked
+//! against, the `engine = "burn"` training option, and the reader of
+//! format-1 bundles (burn records).
 
+pub mod arch;
 pub mod bundle;
+#[cfg(feature = "burn")]
+pub mod convert;
 pub mod data;
+#[cfg(feature = "embedded-model")]
+pub mod embedded;
 pub mod error;
+#[cfg(feature = "burn")]
 pub mod export;
+#[cfg(feature = "burn")]
 pub mod import;
 pub mod inference;
 pub mod learner;
+#[cfg(feature = "burn")]
 pub mod model;
 pub mod plot;
+#[cfg(feature = "burn")]
 pub mod step;
 pub mod training;
+pub mod weights_file;
 
+pub use arch::{MU_GS, ModelConfig, NUM_OUTPUTS};
 pub use bundle::{Bundle, Manifest};
 pub use error::NetError;
 pub use inference::{DenoiseParams, StageTimes, denoise};
-pub use model::{MU_GS, ModelConfig, NormalNet};
-
-/// burn's device handle, re-exported so callers need no direct burn dependency.
-pub use burn::tensor::Device;
-
-/// The CPU device (burn's Flex backend), for inference.
-pub fn cpu_device() -> Device {
-    Device::flex()
-}
+#[cfg(feature = "burn")]
+pub use model::NormalNet;

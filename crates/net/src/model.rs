@@ -1,5 +1,7 @@
-//! The NormalNet network (Zhao et al. 2019, "NormalNet: Learning-based normal
-//! filtering for mesh denoising", §3.2; SPEC §6): a residual 3D CNN mapping the
+//! The NormalNet network in burn (feature `burn`; Zhao et al. 2019,
+//! "NormalNet: Learning-based normal filtering for mesh denoising", §3.2;
+//! SPEC §6), the reference the CPU engine was checked against: a residual
+//! 3D CNN mapping the
 //! voxelized neighbourhood of one face to six filtered normals, one per μ_g of
 //! [`MU_GS`], in the face's local frame.
 //!
@@ -19,122 +21,13 @@ use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
-use serde::{Deserialize, Serialize};
 
-use crate::NetError;
+use crate::arch::truncated_normal;
+pub use crate::arch::{MU_GS, ModelConfig, NUM_OUTPUTS};
 
-/// The six guidance widths μ_g of the network outputs (SPEC §6), in output order.
-pub const MU_GS: [f64; 6] = [0.25, 0.30, 0.35, 0.40, 0.45, 0.50];
-
-/// Number of outputs per sample: one 3-vector per μ_g.
-pub const NUM_OUTPUTS: usize = 3 * MU_GS.len();
-
-/// Architecture numbers of one network. Presets: [`ModelConfig::paper`],
-/// [`ModelConfig::lite`] (the default on CPU), [`ModelConfig::tiny`].
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ModelConfig {
-    /// Grid side D = H = W = 2·T_s + 1 (41 paper, 21 lite, 15 tiny).
-    pub grid: usize,
-    /// Channels of the three residual blocks; the first convolution has the
-    /// first block's channel count (paper 64/128/256).
-    pub channels: [usize; 3],
-    /// Widths of the three hidden fully connected layers (paper 512/256/128).
-    pub hidden: [usize; 3],
-    /// Number of outputs (3 × number of μ_g values; 18).
-    pub outputs: usize,
-}
-
+/// The burn form of the architecture: [`ModelConfig::init`] draws the
+/// same weights as [`ModelConfig::init_weights`] (checked in the tests).
 impl ModelConfig {
-    /// The paper's network: 41³ grid, 64/128/256 channels.
-    pub fn paper() -> ModelConfig {
-        ModelConfig {
-            grid: 41,
-            channels: [64, 128, 256],
-            hidden: [512, 256, 128],
-            outputs: NUM_OUTPUTS,
-        }
-    }
-
-    /// The CPU default: 21³ grid, 16/32/64 channels.
-    pub fn lite() -> ModelConfig {
-        ModelConfig {
-            grid: 21,
-            channels: [16, 32, 64],
-            ..ModelConfig::paper()
-        }
-    }
-
-    /// For tests and very large meshes: 15³ grid, 8/16/32 channels.
-    pub fn tiny() -> ModelConfig {
-        ModelConfig {
-            grid: 15,
-            channels: [8, 16, 32],
-            ..ModelConfig::paper()
-        }
-    }
-
-    /// The preset of this name (`paper`, `lite`, `tiny`).
-    pub fn preset(name: &str) -> Result<ModelConfig, NetError> {
-        match name {
-            "paper" => Ok(ModelConfig::paper()),
-            "lite" => Ok(ModelConfig::lite()),
-            "tiny" => Ok(ModelConfig::tiny()),
-            _ => Err(NetError::InvalidParameter {
-                name: "preset",
-                message: format!("unknown preset {name:?} (expected paper, lite or tiny)"),
-            }),
-        }
-    }
-
-    /// Checks that every size is positive.
-    pub fn validate(&self) -> Result<(), NetError> {
-        let bad = |name, message: &str| {
-            Err(NetError::InvalidParameter {
-                name,
-                message: message.to_string(),
-            })
-        };
-        if self.grid == 0 {
-            return bad("grid", "must be positive");
-        }
-        if self.channels.contains(&0) {
-            return bad("channels", "must all be positive");
-        }
-        if self.hidden.contains(&0) {
-            return bad("hidden", "must all be positive");
-        }
-        if self.outputs == 0 {
-            return bad("outputs", "must be positive");
-        }
-        Ok(())
-    }
-
-    /// Multiply-adds of one forward pass of one sample (convolutions and fully
-    /// connected layers; batch norm, ReLU and pooling excluded).
-    pub fn macs_per_sample(&self) -> u64 {
-        let mut d = self.grid as u64;
-        let c0 = self.channels[0] as u64;
-        let mut macs = d * d * d * c0 * 3 * 125;
-        let mut c_in = c0;
-        for &c in &self.channels {
-            let c = c as u64;
-            let d_out = (d - 1) / 2 + 1; // 3³ stride 2 padding 1, and 1³ stride 2
-            let cubes = d_out * d_out * d_out;
-            macs += cubes * c * c_in * 27; // conv a
-            macs += cubes * c * c * 27; // conv b
-            macs += cubes * c * c_in; // projection
-            c_in = c;
-            d = d_out;
-        }
-        let mut w_in = c_in;
-        for &h in &self.hidden {
-            macs += w_in * h as u64;
-            w_in = h as u64;
-        }
-        macs + w_in * self.outputs as u64
-    }
-
     /// Builds a network with truncated-normal weights drawn from `seed`.
     pub fn init(&self, device: &Device, seed: u64) -> NormalNet {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -229,21 +122,6 @@ impl NormalNet {
         }
         self.out.forward(x).tanh() // [b, 18]
     }
-}
-
-/// Samples `n` values of a normal(0, std) truncated at ±2·std (redrawn).
-fn truncated_normal(rng: &mut ChaCha8Rng, n: usize, std: f64) -> Vec<f32> {
-    let normal = Normal::new(0.0, 1.0).expect("unit normal is valid");
-    (0..n)
-        .map(|_| {
-            loop {
-                let z: f64 = normal.sample(rng);
-                if z.abs() <= 2.0 {
-                    break (z * std) as f32;
-                }
-            }
-        })
-        .collect()
 }
 
 fn conv(
@@ -379,9 +257,9 @@ mod tests {
     }
 
     #[test]
-    fn macs_count_matches_hand_count_for_lite() {
-        // first conv: 21³ · 16 · 3 · 125 = 55,566,000 multiply-adds
-        let macs = ModelConfig::lite().macs_per_sample();
-        assert!(macs > 55_566_000 && macs < 120_000_000, "{macs}");
+    fn init_draws_the_same_weights_as_init_weights() {
+        let config = ModelConfig::tiny();
+        let burn = crate::export::net_weights(&config.init(&Device::flex(), 11), &config).unwrap();
+        assert_eq!(burn, config.init_weights(11));
     }
 }

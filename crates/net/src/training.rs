@@ -20,7 +20,7 @@
 //!
 //! The run is resumable: every few minutes the current weights, Adam state
 //! and step are written to `OUT/checkpoint/`; the best weights (lowest
-//! validation error) to `OUT/netK.bpk`; the mesh states `M_k` to
+//! validation error) to `OUT/netK.safetensors`; the mesh states `M_k` to
 //! `OUT/states/`. `--resume` continues where it stopped.
 
 use std::io::Write as _;
@@ -28,7 +28,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use burn::tensor::Device;
 use normalnet_filters::{GtGuidedGnfParams, gt_guided_gnf};
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
@@ -37,14 +36,14 @@ use normalnet_voxel::{BalancedSampler, Loader, LoaderConfig, SampleSource, Voxel
 use serde::{Deserialize, Serialize};
 
 use crate::NetError;
-use crate::bundle::{
-    INTERVALS, MANIFEST, Manifest, NetworkInfo, load_network, new_manifest, write_atomically,
-};
+use crate::arch::{MU_GS, ModelConfig, NUM_OUTPUTS};
+use crate::bundle::{INTERVALS, MANIFEST, Manifest, NetworkInfo, new_manifest, write_atomically};
 use crate::data::SampleBatch;
 use crate::inference::filtered_normals;
 use crate::learner::{Engine, Learner};
-use crate::model::{MU_GS, ModelConfig, NUM_OUTPUTS, NormalNet};
+use crate::weights_file::load as load_network;
 use normalnet_cnn::Loss;
+use normalnet_cnn::{Cnn, NetWeights};
 
 /// Output slot of μ_g 0.35, the one validated (SPEC §8).
 const VALIDATION_SLOT: usize = 2;
@@ -209,6 +208,11 @@ impl TrainConfig {
         let loss = self
             .loss_fn()
             .ok_or_else(|| bad(format!("loss = {:?}: expected mse or l1", self.loss)))?;
+        if !engine.available() {
+            return Err(bad(
+                "engine = \"burn\" needs a build with --features burn".into()
+            ));
+        }
         if engine == Engine::Burn && loss != Loss::Mse {
             return Err(bad("the burn engine trains with loss = \"mse\" only".into()));
         }
@@ -359,7 +363,7 @@ fn make_pairs(
 /// Per-network progress, saved in `OUT/state.toml` for `--resume`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct RunState {
-    /// networks finished (their best weights are `OUT/netK.bpk`)
+    /// networks finished (their best weights are `OUT/netK.safetensors`)
     finished: usize,
     /// the manifest entries of finished networks
     networks: Vec<NetworkInfo>,
@@ -374,7 +378,7 @@ struct RunState {
 }
 
 /// Trains the six networks of `config` into `out` and writes the bundle
-/// there (`net1.bpk`…`net6.bpk` + `manifest.toml`, `train_log.csv`,
+/// there (`net1.safetensors`…`net6.safetensors` + `manifest.toml`, `train_log.csv`,
 /// `loss.png`). With `resume`, continues from `out/state.toml`.
 ///
 /// # Errors
@@ -411,7 +415,6 @@ pub fn train(
     )?;
     let model_config = ModelConfig::preset(&config.preset)?;
     let voxel = config.voxel_params();
-    let plain = Device::flex();
     let init = init_bundle(config)?;
     let mut pairs = make_pairs(config, &config.sources, config.seed, progress)?;
     let mut val_pairs = make_pairs(config, &config.validation, config.seed + 777, progress)?;
@@ -419,13 +422,12 @@ pub fn train(
     if !log_path.is_file() || !resume {
         write_atomically(&log_path, b"network,step,lr,loss,val_deg,seconds\n")?;
     }
-    let mut networks: Vec<NormalNet> = Vec::new();
+    let mut networks: Vec<NetWeights> = Vec::new();
     for k in 0..run.finished {
         networks.push(load_network(
             &model_config,
             &config.preset,
             &out.join(crate::bundle::network_file(k)),
-            &plain,
         )?);
     }
     // restore the mesh states M_{a_k} of the first unfinished network
@@ -467,26 +469,24 @@ pub fn train(
                 &model_config,
                 &config.preset,
                 &dir.join(crate::bundle::network_file(k)),
-                &plain,
             )?
         } else if config.warm_start && k > 0 {
             load_network(
                 &model_config,
                 &config.preset,
                 &out.join(crate::bundle::network_file(k - 1)),
-                &plain,
             )?
         } else {
-            model_config.init(&plain, config.seed + k as u64)
+            model_config.init_weights(config.seed + k as u64)
         };
         // a network that starts predicting residuals starts at the identity:
         // zero output layer (its own gradient is not zero, so it learns)
         let start_net = if residual && init.is_none() {
-            zero_output_layer(start_net, &model_config)?
+            zero_output_layer(start_net)
         } else {
             start_net
         };
-        let mut learner = Learner::new(engine, start_net, &model_config, loss_fn)?;
+        let mut learner = Learner::new(engine, &start_net, &model_config, loss_fn)?;
         let resumed = resume && run.step > 0 && learner.restore(&ckpt_dir, &model_config)?;
         if !resumed {
             run.step = 0;
@@ -511,9 +511,9 @@ pub fn train(
         )?;
         let baseline = val.baseline_deg;
         if run.best_val.is_infinite() {
-            let e = validation_error(&learner.compiled(voxel.side())?, &val);
+            let e = validation_error(&learner.compiled(&model_config)?, &val);
             run.best_val = e;
-            learner.save(&out.join(crate::bundle::network_file(k)))?;
+            learner.save(&out.join(crate::bundle::network_file(k)), &model_config)?;
             append_log(
                 &log_path,
                 k,
@@ -546,10 +546,10 @@ pub fn train(
             let mut val_err = f64::NAN;
             let time_up = limit > 0.0 && run.seconds >= limit;
             if run.step % config.validate_every == 0 || run.step == steps || time_up {
-                val_err = validation_error(&learner.compiled(voxel.side())?, &val);
+                val_err = validation_error(&learner.compiled(&model_config)?, &val);
                 if val_err < run.best_val {
                     run.best_val = val_err;
-                    learner.save(&out.join(crate::bundle::network_file(k)))?;
+                    learner.save(&out.join(crate::bundle::network_file(k)), &model_config)?;
                 }
             }
             progress.message(&format!(
@@ -579,8 +579,11 @@ pub fn train(
             &model_config,
             &config.preset,
             &out.join(crate::bundle::network_file(k)),
-            &plain,
         )?;
+        let best_engine = Cnn::new(&best).map_err(|e| NetError::Record {
+            path: out.join(crate::bundle::network_file(k)),
+            message: e.to_string(),
+        })?;
         let (prior_samples, prior_seconds) = init.as_ref().map_or((0, 0.0), |(_, m)| {
             (m.networks[k].samples_seen, m.networks[k].train_seconds)
         });
@@ -605,22 +608,20 @@ pub fn train(
             progress.message(&format!("regenerating meshes with network {}", k + 1));
             regenerate(
                 &mut pairs,
-                &networks[k],
+                &best_engine,
                 residual,
                 voxel,
                 passes,
                 config.inference_batch,
-                &plain,
                 progress,
             )?;
             regenerate(
                 &mut val_pairs,
-                &networks[k],
+                &best_engine,
                 residual,
                 voxel,
                 passes,
                 config.inference_batch,
-                &plain,
                 progress,
             )?;
             for (i, p) in pairs.iter().chain(val_pairs.iter()).enumerate() {
@@ -742,18 +743,13 @@ fn init_bundle(config: &TrainConfig) -> Result<Option<(PathBuf, Manifest)>, NetE
     Ok(Some((dir, manifest)))
 }
 
-/// `net` with its output layer's weights and bias set to zero.
-fn zero_output_layer(net: NormalNet, config: &ModelConfig) -> Result<NormalNet, NetError> {
-    let bad = |e: crate::export::ExportError| NetError::Record {
-        path: PathBuf::from("<model>"),
-        message: e.to_string(),
-    };
-    let mut w = crate::export::net_weights(&net, config).map_err(bad)?;
+/// `w` with its output layer's weights and bias set to zero.
+fn zero_output_layer(mut w: NetWeights) -> NetWeights {
     w.output.weight.fill(0.0);
     if let Some(b) = w.output.bias.as_mut() {
         b.fill(0.0);
     }
-    crate::import::normal_net(config, &w, &Device::flex()).map_err(bad)
+    w
 }
 
 fn mean(v: &[f64]) -> f64 {
@@ -900,12 +896,11 @@ fn validation_error(cnn: &normalnet_cnn::Cnn, val: &ValidationSet) -> f64 {
 #[allow(clippy::too_many_arguments)]
 fn regenerate(
     pairs: &mut [Pair],
-    net: &NormalNet,
+    net: &Cnn,
     residual: bool,
     voxel: VoxelParams,
     passes: usize,
     batch: usize,
-    device: &Device,
     progress: &dyn Progress,
 ) -> Result<(), NetError> {
     let slot = crate::bundle::nearest_mu_g(&MU_GS, REGEN_MU_G);
@@ -925,7 +920,6 @@ fn regenerate(
                     voxel,
                     slot,
                     batch,
-                    device,
                     None,
                     &NoProgress,
                 )?;

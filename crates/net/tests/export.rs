@@ -1,8 +1,8 @@
 //! The burn-free CPU engine reproduces the burn network it was exported from.
 
 use burn::tensor::{Tensor, TensorData};
+use normalnet_net::ModelConfig;
 use normalnet_net::export::{compile, net_weights};
-use normalnet_net::{ModelConfig, cpu_device};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -20,7 +20,7 @@ fn sparse_grids(len: usize, seed: u64) -> Vec<f32> {
 }
 
 fn agree(config: ModelConfig, seed: u64) {
-    let device = cpu_device();
+    let device = burn::tensor::Device::flex();
     let net = config.init(&device, seed);
     let cnn = compile(&net, &config).unwrap();
     let batch = 3;
@@ -47,7 +47,7 @@ fn lite_network_matches_burn() {
 
 #[test]
 fn export_names_a_misshapen_config() {
-    let device = cpu_device();
+    let device = burn::tensor::Device::flex();
     let net = ModelConfig::tiny().init(&device, 3);
     let err = net_weights(&net, &ModelConfig::lite()).unwrap_err();
     assert!(err.to_string().contains("conv_in.weight"), "{err}");

@@ -37,10 +37,15 @@ fn tiny_training_writes_a_bundle_that_denoises() {
             .iter()
             .all(|n| n.validation_error_deg.is_finite())
     );
-    for f in ["manifest.toml", "net6.bpk", "train_log.csv", "loss.png"] {
+    for f in [
+        "manifest.toml",
+        "net6.safetensors",
+        "train_log.csv",
+        "loss.png",
+    ] {
         assert!(dir.path().join(f).is_file(), "{f} missing");
     }
-    let bundle = Bundle::load(dir.path(), &normalnet_net::cpu_device()).unwrap();
+    let bundle = Bundle::load(dir.path()).unwrap();
     assert_eq!(bundle.manifest, manifest);
     let mesh = normalnet_voxel::shapes::generate_seeded(7, 150).unwrap();
     let params = DenoiseParams {
@@ -82,15 +87,18 @@ fn a_run_stopped_between_networks_resumes() {
     };
     // the first two networks only: no bundle yet
     assert!(train(&config, dir.path(), false, &NoProgress).is_err());
-    assert!(dir.path().join("net2.bpk").is_file());
+    assert!(dir.path().join("net2.safetensors").is_file());
     assert!(!dir.path().join("manifest.toml").exists());
-    let net1 = std::fs::read(dir.path().join("net1.bpk")).unwrap();
+    let net1 = std::fs::read(dir.path().join("net1.safetensors")).unwrap();
     config.stop_after = 6;
     let manifest = train(&config, dir.path(), true, &NoProgress).unwrap();
     assert_eq!(manifest.networks.len(), 6);
     assert_eq!(manifest.networks[0].steps, 2);
     // finished networks are kept as they were
-    assert_eq!(std::fs::read(dir.path().join("net1.bpk")).unwrap(), net1);
+    assert_eq!(
+        std::fs::read(dir.path().join("net1.safetensors")).unwrap(),
+        net1
+    );
     let log = std::fs::read_to_string(dir.path().join("train_log.csv")).unwrap();
     assert!(log.lines().any(|l| l.starts_with("6,")));
     assert!(log.lines().any(|l| l.starts_with("1,")));
@@ -182,10 +190,10 @@ fn a_run_continues_a_bundle_and_counts_its_samples() {
     };
     let err = train(&other_grid, third.path(), false, &NoProgress).unwrap_err();
     assert!(err.to_string().contains("voxel grid"), "{err}");
-    assert!(!third.path().join("net1.bpk").exists());
+    assert!(!third.path().join("net1.safetensors").exists());
 
     // the continued bundle denoises in both output forms, with the fold guard
-    let bundle = Bundle::load(second.path(), &normalnet_net::cpu_device()).unwrap();
+    let bundle = Bundle::load(second.path()).unwrap();
     let mesh = normalnet_voxel::shapes::generate_seeded(7, 150).unwrap();
     for guided_from in [0, 1] {
         let params = DenoiseParams {

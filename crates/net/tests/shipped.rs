@@ -8,8 +8,8 @@
 
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{NoProgress, NoiseParams, Topology, add_noise};
+use normalnet_net::Bundle;
 use normalnet_net::inference::filtered_normals;
-use normalnet_net::{Bundle, cpu_device};
 use normalnet_voxel::frame::{Mat3, mat_vec};
 use std::path::Path;
 
@@ -31,7 +31,7 @@ fn trained_network_is_nearly_rotation_equivariant() {
         println!("SKIP: no shipped bundle at {}", path.display());
         return;
     }
-    let bundle = Bundle::load(&path, &cpu_device()).unwrap();
+    let bundle = Bundle::load(&path).unwrap();
     let clean = normalnet_voxel::shapes::generate_seeded(21, 600).unwrap();
     let noisy = add_noise(
         &clean,
@@ -49,12 +49,11 @@ fn trained_network_is_nearly_rotation_equivariant() {
         filtered_normals(
             m,
             &topology,
-            &bundle.networks[0],
+            &bundle.engines[0],
             bundle.manifest.networks[0].residual,
             bundle.voxel_params(),
             bundle.output_for_mu_g(0.35),
             128,
-            &bundle.device,
             None,
             &NoProgress,
         )
@@ -94,7 +93,7 @@ fn the_fold_guard_folds_no_more_faces_on_the_example() {
         println!("SKIP: no shipped bundle at {}", path.display());
         return;
     }
-    let bundle = Bundle::load(&path, &cpu_device()).unwrap();
+    let bundle = Bundle::load(&path).unwrap();
     let noisy = normalnet_mesh::read_mesh(root.join("examples/noisy-part.obj")).unwrap();
     let clean = normalnet_mesh::read_mesh(root.join("examples/clean-part.obj")).unwrap();
     let run = |fold_guard: bool| {

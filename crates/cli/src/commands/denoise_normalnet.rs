@@ -1,15 +1,12 @@
 //! The NormalNet method of `normalnet denoise` (SPEC §7): loads a model
-//! bundle (the shipped one by default) and runs the iterative pipeline.
+//! bundle (the one built into the program by default) and runs the
+//! iterative pipeline.
 
 use anyhow::Context;
 use normalnet_mesh::{Mesh, Progress};
 use normalnet_net::inference::StageTimes;
 use normalnet_net::{Bundle, DenoiseParams};
 use std::path::PathBuf;
-
-/// The bundle shipped in the repository (`models/lite`), used when neither
-/// `--model` nor `NORMALNET_MODEL` names one.
-pub const DEFAULT_MODEL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/lite");
 
 /// Environment variable naming a bundle folder (overridden by `--model`).
 pub const MODEL_ENV: &str = "NORMALNET_MODEL";
@@ -34,15 +31,15 @@ pub struct NormalnetOptions {
     pub fold_guard_cos: Option<f64>,
 }
 
-/// The bundle folder to use: `--model`, else `$NORMALNET_MODEL`, else
-/// [`DEFAULT_MODEL`].
-pub fn model_path(options: &NormalnetOptions) -> PathBuf {
+/// The bundle folder to use: `--model`, else `$NORMALNET_MODEL`; `None`:
+/// the shipped `models/lite`, built into the program.
+pub fn model_path(options: &NormalnetOptions) -> Option<PathBuf> {
     if let Some(p) = &options.model {
-        return p.clone();
+        return Some(p.clone());
     }
     match std::env::var_os(MODEL_ENV) {
-        Some(p) if !p.is_empty() => PathBuf::from(p),
-        _ => PathBuf::from(DEFAULT_MODEL),
+        Some(p) if !p.is_empty() => Some(PathBuf::from(p)),
+        _ => None,
     }
 }
 
@@ -63,11 +60,13 @@ pub fn params(options: &NormalnetOptions) -> DenoiseParams {
     }
 }
 
-/// Loads the bundle chosen by `options` on the CPU (burn Flex).
+/// Loads the bundle chosen by `options` and compiles its networks.
 pub fn load_bundle(options: &NormalnetOptions) -> anyhow::Result<Bundle> {
-    let path = model_path(options);
-    Bundle::load(&path, &normalnet_net::cpu_device())
-        .with_context(|| format!("loading the NormalNet model bundle {}", path.display()))
+    match model_path(options) {
+        Some(path) => Bundle::load(&path)
+            .with_context(|| format!("loading the NormalNet model bundle {}", path.display())),
+        None => normalnet_net::embedded::lite().context("the built-in NormalNet model"),
+    }
 }
 
 /// Denoises `mesh` with NormalNet.

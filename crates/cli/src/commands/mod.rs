@@ -6,6 +6,7 @@ pub mod denoise;
 pub mod denoise_normalnet;
 pub mod info;
 pub mod metrics;
+pub mod models;
 pub mod noise;
 pub mod render;
 pub mod shapes;

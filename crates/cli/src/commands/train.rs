@@ -11,7 +11,7 @@ pub struct Args {
     /// Network size: paper, lite or tiny (overrides the config's `preset`).
     #[arg(long)]
     pub preset: Option<String>,
-    /// Output folder: the bundle (net1..6.bpk, manifest.toml), train_log.csv,
+    /// Output folder: the bundle (net1..6.safetensors, manifest.toml), train_log.csv,
     /// loss.png, checkpoints.
     #[arg(long)]
     pub out: PathBuf,

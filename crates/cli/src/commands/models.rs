@@ -1,0 +1,128 @@
+//! `normalnet models`: what a NormalNet model bundle is (preset, voxel grid,
+//! training data, per-network validation errors) — the built-in one by
+//! default — and `normalnet models convert` for bundles of format 1.
+
+use std::path::PathBuf;
+
+use normalnet_net::Bundle;
+
+use super::denoise_normalnet::{NormalnetOptions, load_bundle};
+
+/// Arguments of `normalnet models`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Bundle folder to describe (default: `$NORMALNET_MODEL`, else the
+    /// built-in models/lite).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Print the description as JSON (the whole manifest).
+    #[arg(long)]
+    pub json: bool,
+    #[command(subcommand)]
+    pub action: Option<Action>,
+}
+
+/// What `normalnet models` does besides describing.
+#[derive(clap::Subcommand)]
+pub enum Action {
+    /// Convert a format-1 bundle (burn records, net1.bpk ...) into a
+    /// format-2 bundle (safetensors) in a new folder (needs a build with
+    /// `--features burn`).
+    Convert {
+        /// the format-1 bundle folder
+        from: PathBuf,
+        /// the new folder
+        to: PathBuf,
+    },
+}
+
+/// Runs `normalnet models`.
+pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
+    if let Some(Action::Convert { from, to }) = &args.action {
+        return convert(from, to);
+    }
+    let bundle = load_bundle(&NormalnetOptions {
+        model: args.model.clone(),
+        ..NormalnetOptions::default()
+    })?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&bundle.manifest)?);
+    } else {
+        print!("{}", describe(&bundle));
+    }
+    Ok(())
+}
+
+/// A few lines saying what `bundle` is.
+pub fn describe(bundle: &Bundle) -> String {
+    let m = &bundle.manifest;
+    let mut s = String::new();
+    let mut line = |t: String| {
+        s.push_str(&t);
+        s.push('\n');
+    };
+    line(format!("bundle      {}", bundle.path.display()));
+    line(format!(
+        "preset      {} (grid {}³, channels {:?}, hidden {:?}); format {}",
+        m.preset, m.model.grid, m.model.channels, m.model.hidden, m.format
+    ));
+    line(format!(
+        "voxel       T_s {}, alpha_c {}; outputs for mu_g {:?}",
+        m.voxel.t_s, m.voxel.alpha_c, m.mu_gs
+    ));
+    line(format!("code        {}", m.code_version));
+    line(format!(
+        "training    {} sources, validation on {}; seed {}, batch {}",
+        m.training.sources.len(),
+        m.training.validation.join(", "),
+        m.training.seed,
+        m.training.batch
+    ));
+    line("network  iterations  samples   seconds  validation E (input)  form".into());
+    for (i, n) in m.networks.iter().enumerate() {
+        let last = if n.interval[1] == 0 {
+            "N_f".to_string()
+        } else {
+            n.interval[1].to_string()
+        };
+        line(format!(
+            "{:>7}  {:>4}-{:<5}  {:>7}  {:>8.0}  {:>6.2}° ({:>6.2}°)     {}",
+            i + 1,
+            n.interval[0],
+            last,
+            n.samples_seen,
+            n.train_seconds,
+            n.validation_error_deg,
+            n.validation_baseline_deg,
+            if n.residual { "residual" } else { "normal" }
+        ));
+    }
+    s
+}
+
+#[cfg(feature = "burn")]
+fn convert(from: &std::path::Path, to: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    crate::output::check_dir(to)?;
+    let manifest = normalnet_net::convert::convert_format1(from, to)
+        .with_context(|| format!("converting {} into {}", from.display(), to.display()))?;
+    let bundle = Bundle::load(to).with_context(|| format!("reading back {}", to.display()))?;
+    println!(
+        "{} ({} preset) converted to format {} in {}",
+        from.display(),
+        manifest.preset,
+        manifest.format,
+        to.display()
+    );
+    print!("{}", describe(&bundle));
+    Ok(())
+}
+
+#[cfg(not(feature = "burn"))]
+fn convert(from: &std::path::Path, _to: &std::path::Path) -> anyhow::Result<()> {
+    anyhow::bail!(
+        "converting {} needs burn to read format-1 records: build with \
+         `cargo build --release --features burn` (or `cargo run --release --features burn -- models convert ...`)",
+        from.display()
+    )
+}
