@@ -22,7 +22,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Denoise a mesh (NormalNet by default, or a classical method).
-    Denoise(commands::denoise::Args),
+    Denoise(Box<commands::denoise::Args>),
     /// Add synthetic noise to a clean mesh (SPEC §2).
     Noise(commands::noise::Args),
     /// Error metrics of a result against ground truth (E_a, E_v, ...).
@@ -69,7 +69,7 @@ fn main() {
         Command::Bench(a) => {
             output::check_dir(&a.out).and_then(|()| commands::bench::run(a, quiet))
         }
-        Command::Denoise(a) => commands::denoise::run(a, quiet),
+        Command::Denoise(a) => commands::denoise::run(*a, quiet),
         Command::Noise(a) => commands::noise::run(a, quiet),
         Command::Metrics(a) => commands::metrics::run(a, quiet),
         Command::Info(a) => commands::info::run(a, quiet),

@@ -167,7 +167,7 @@ fn issue_14_zero_vertex_iterations_is_refused_for_normalnet() {
     let o = normalnet(&["denoise", s(&input), s(&out), "--vertex-iterations", "0"]);
     assert!(!o.status.success());
     assert!(
-        stderr(&o).contains("--vertex-iterations 0 with --method normalnet"),
+        stderr(&o).contains("normalnet: vertex_iterations = 0 would run the whole network"),
         "{}",
         stderr(&o)
     );

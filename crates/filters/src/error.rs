@@ -13,9 +13,6 @@ pub enum FilterError {
         /// what is wrong
         message: String,
     },
-    /// `Method::from_name` got a name it does not know.
-    #[error("unknown method {0:?} (expected one of: gnf, bnf, sun07, l0, bi, vt)")]
-    UnknownMethod(String),
     /// A per-face or per-vertex array has the wrong length.
     #[error("{what} has {found} entries, but the mesh has {expected}")]
     LengthMismatch {

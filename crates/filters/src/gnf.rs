@@ -330,6 +330,16 @@ pub fn gnf(mesh: &Mesh, params: &GnfParams, progress: &dyn Progress) -> Result<M
     ))
 }
 
+impl crate::ClassicalMethod for GnfParams {
+    fn check(&self) -> Result<(), FilterError> {
+        self.validate()
+    }
+
+    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
+        gnf(mesh, self, progress)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -136,3 +136,13 @@ pub fn sun07(
         progress,
     ))
 }
+
+impl crate::ClassicalMethod for Sun07Params {
+    fn check(&self) -> Result<(), FilterError> {
+        self.validate()
+    }
+
+    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
+        sun07(mesh, self, progress)
+    }
+}

@@ -288,6 +288,16 @@ pub fn vt(mesh: &Mesh, params: &VtParams, progress: &dyn Progress) -> Result<Mes
     ))
 }
 
+impl crate::ClassicalMethod for VtParams {
+    fn check(&self) -> Result<(), FilterError> {
+        self.validate()
+    }
+
+    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
+        vt(mesh, self, progress)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

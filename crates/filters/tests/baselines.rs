@@ -5,7 +5,8 @@
 //! were not tuned on this (test) model. Skips with a message when the
 //! shared data is absent.
 
-use normalnet_filters::Method;
+mod common;
+use common::method;
 use normalnet_mesh::metrics::compare;
 use normalnet_mesh::{NoProgress, read_mesh};
 use std::path::Path;
@@ -24,7 +25,7 @@ fn bi_and_vt_improve_fandisk03() {
     let before = compare(&clean, &noisy).unwrap();
     assert!(before.e_a_deg > 25.0, "noisy E_a {}", before.e_a_deg);
     for name in ["bi", "vt"] {
-        let method = Method::from_name(name).unwrap();
+        let method = method(name);
         let out = method.denoise(&noisy, &NoProgress).unwrap();
         assert_eq!(out.faces, noisy.faces, "{name} keeps the faces");
         let after = compare(&clean, &out).unwrap();

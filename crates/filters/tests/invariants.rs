@@ -3,17 +3,11 @@
 //! planes and cubes stay (nearly) unchanged; degenerate faces and boundaries
 //! produce no NaN.
 
-use normalnet_filters::{GtGuidedGnfParams, Method, gt_guided_gnf};
+mod common;
+use common::{method, methods};
+use normalnet_filters::{GtGuidedGnfParams, gt_guided_gnf};
 use normalnet_mesh::geometry::{face_normals, mean_edge_length};
 use normalnet_mesh::{Mesh, NoProgress, Topology, vec3};
-
-/// Every classical method with default parameters.
-fn methods() -> Vec<Method> {
-    Method::NAMES
-        .iter()
-        .map(|n| Method::from_name(n).unwrap())
-        .collect()
-}
 
 /// UV sphere with a deterministic radial perturbation.
 fn noisy_sphere(rings: usize, segs: usize, noise: f64) -> Mesh {
@@ -338,10 +332,7 @@ fn bi_and_vt_denoise_a_noisy_cube_and_keep_its_edges() {
     let noisy = clean.with_positions(positions);
     let before = mean_angle(&noisy, &clean);
     for name in ["bi", "vt"] {
-        let out = Method::from_name(name)
-            .unwrap()
-            .denoise(&noisy, &NoProgress)
-            .unwrap();
+        let out = method(name).denoise(&noisy, &NoProgress).unwrap();
         let after = mean_angle(&out, &clean);
         eprintln!("{name}: noisy cube E_a {before:.2}° -> {after:.2}°");
         assert!(after < 0.15 * before, "{name}: E_a {before} -> {after}");

@@ -3,8 +3,10 @@
 //! method; the fold guard keeps every face that faced its filtered normal
 //! facing it, and does not depend on the thread count.
 
+mod common;
+use common::methods;
 use normalnet_filters::{
-    Method, VertexUpdate, VertexUpdateBuffers, vertex_update_in_place, vertex_update_with,
+    VertexUpdate, VertexUpdateBuffers, vertex_update_in_place, vertex_update_with,
 };
 use normalnet_mesh::geometry::mean_edge_length;
 use normalnet_mesh::outliers::without_vertices;
@@ -45,13 +47,6 @@ fn noisy_sphere(rings: usize, segs: usize, noise: f64) -> Mesh {
         }
     }
     Mesh::new(p, f).unwrap()
-}
-
-fn methods() -> Vec<Method> {
-    Method::NAMES
-        .iter()
-        .map(|n| Method::from_name(n).unwrap())
-        .collect()
 }
 
 /// Largest distance between corresponding vertices, `skip` excluded.

@@ -7,9 +7,9 @@
 //!
 //! Settings come from a TOML file (`configs/bench.toml`): for each method,
 //! `[defaults.METHOD]` then `[models."MODEL".METHOD]` override the method's
-//! own defaults key by key; keys are the fields of the method's params struct
-//! (`normalnet_filters::GnfParams`, ...) or, for `normalnet`, `iterations`,
-//! `vertex_iterations`, `mu_g` and `model`. `[models."MODEL"] view = [az, el]`
+//! own defaults key by key; keys are the fields of the method's parameters
+//! (`normalnet_denoise`'s one mechanism: what `normalnet denoise --json`
+//! prints as `parameters`, and `--param` sets). `[models."MODEL"] view = [az, el]`
 //! sets the camera of that model's picture and `skip = ["METHOD", ...]`
 //! leaves methods out on that model (shown as `skipped`). A column may be a
 //! variant `METHOD-NAME` (e.g. `gnf-ref`, `l0-lambda0.1`): it runs METHOD
@@ -19,13 +19,12 @@
 //! with the model's NormalNet N_f / N_v / μ_g unless `[..oracle]` says otherwise. A failing method is reported as a
 //! failed cell and the bench goes on.
 
-use crate::commands::denoise_normalnet::{self, NormalnetOptions};
 use crate::commands::render::{parse_size, parse_view};
 use crate::input;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
-use normalnet_filters::{GtGuidedGnfParams, Method, gt_guided_gnf};
-use normalnet_mesh::geometry::face_normals;
+use normalnet_denoise::params::describe;
+use normalnet_denoise::{Denoiser, Kind, METHODS, Params};
 use normalnet_mesh::metrics::{Metrics, compare, per_face_angle_errors};
 use normalnet_mesh::{Mesh, read_mesh};
 use normalnet_render::report::{BenchReport, NOISY, RunRecord, split_model_name, write_report};
@@ -33,7 +32,6 @@ use normalnet_render::{
     ColourBar, Image, RenderOptions, append_colour_bar, compose_grid, draw_lines, error_colors,
     nice_error_scale, render,
 };
-use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -214,158 +212,68 @@ impl Settings {
             .and_then(|v| view_from_toml(v).ok())
     }
 
-    /// The classical `method` for `model` with its settings applied, and a
-    /// one-line description of its parameters.
-    /// `name` may be a variant (`gnf-ref`): the base method with the
-    /// variant's own settings.
-    pub fn classical(&self, model: &str, name: &str) -> anyhow::Result<(Method, String)> {
-        let base = base_method(name).with_context(|| format!("unknown method `{name}`"))?;
-        let method = Method::from_name(&base)?;
-        let mut value = serde_json::to_value(&method)?;
-        // externally tagged: {"Gnf": {field: value, ...}}
-        let params = value
-            .as_object_mut()
-            .and_then(|o| o.values_mut().next())
-            .and_then(|v| v.as_object_mut())
-            .with_context(|| format!("method {name}: parameters are not a struct"))?;
-        for (source, table) in self.overrides(model, name) {
-            for (key, v) in table {
-                if !params.contains_key(&key) {
-                    let known: Vec<&String> = params.keys().collect();
-                    bail!("{source}: unknown key `{key}` for {name} (known: {known:?})");
+    /// The parameters column `column` gives on `model`: its base method
+    /// (the column's name, or the method a variant `METHOD-NAME` runs), the
+    /// settings laid over each other (defaults, then the model's), and where
+    /// they came from. The oracle starts from the N_f / N_v / μ_g of the
+    /// model's NormalNet settings (it is a perfect NormalNet).
+    pub fn params(
+        &self,
+        model: &str,
+        column: &str,
+    ) -> anyhow::Result<(&'static str, Params, String)> {
+        let base = base_method(column).with_context(|| format!("unknown method `{column}`"))?;
+        let mut params = Params::new();
+        let mut sources = Vec::new();
+        if base == ORACLE {
+            for (source, table) in self.overrides(model, NORMALNET) {
+                for (key, v) in table {
+                    if ["iterations", "vertex_iterations", "mu_g"].contains(&key.as_str()) {
+                        params.insert(key, serde_json::to_value(v)?);
+                        sources.push(source.clone());
+                    }
                 }
+            }
+        }
+        for (source, table) in self.overrides(model, column) {
+            for (key, v) in table {
                 params.insert(key, serde_json::to_value(v)?);
             }
+            sources.push(source);
         }
-        let described = describe(params);
-        let method: Method = serde_json::from_value(value)
-            .with_context(|| format!("settings for {name} on {model}"))?;
-        method
-            .validate()
-            .with_context(|| format!("settings for {name} on {model}"))?;
-        Ok((method, described))
+        sources.dedup();
+        Ok((base, params, sources.join(", ")))
     }
 
-    /// The oracle's parameters for `model` and their description: N_f, N_v
-    /// and μ_g of the model's NormalNet settings (the oracle is a perfect
-    /// NormalNet), then the oracle's own settings (any field of
-    /// `GtGuidedGnfParams`) under `name`.
-    pub fn oracle(&self, model: &str, name: &str) -> anyhow::Result<(GtGuidedGnfParams, String)> {
-        let mut value = serde_json::to_value(GtGuidedGnfParams::default())?;
-        let params = value
-            .as_object_mut()
-            .context("oracle parameters are not a struct")?;
-        for (_, table) in self.overrides(model, NORMALNET) {
-            for (key, v) in table {
-                if ["iterations", "vertex_iterations", "mu_g"].contains(&key.as_str()) {
-                    params.insert(key, serde_json::to_value(v)?);
-                }
-            }
-        }
-        for (source, table) in self.overrides(model, name) {
-            for (key, v) in table {
-                if !params.contains_key(&key) {
-                    let known: Vec<&String> = params.keys().collect();
-                    bail!("{source}: unknown key `{key}` for {name} (known: {known:?})");
-                }
-                params.insert(key, serde_json::to_value(v)?);
-            }
-        }
-        let described = describe(params);
-        let p: GtGuidedGnfParams = serde_json::from_value(value)
-            .with_context(|| format!("settings for {name} on {model}"))?;
-        p.validate()
-            .with_context(|| format!("settings for {name} on {model}"))?;
-        Ok((p, described))
-    }
-
-    /// NormalNet options for `model` and their description; `name` is
-    /// `normalnet` or a variant of it (`normalnet-fast`).
-    pub fn normalnet(&self, model: &str, name: &str) -> anyhow::Result<(NormalnetOptions, String)> {
-        let mut options = NormalnetOptions::default();
-        for (source, table) in self.overrides(model, name) {
-            for (key, v) in table {
-                let bad = || format!("{source}: `{key}` has the wrong type ({v})");
-                match key.as_str() {
-                    "iterations" => {
-                        options.iterations =
-                            Some(v.as_integer().filter(|i| *i > 0).with_context(bad)? as usize)
-                    }
-                    "vertex_iterations" => {
-                        options.vertex_iterations =
-                            Some(v.as_integer().filter(|i| *i >= 0).with_context(bad)? as usize)
-                    }
-                    "mu_g" => {
-                        options.mu_g = Some(
-                            v.as_float()
-                                .or_else(|| v.as_integer().map(|i| i as f64))
-                                .with_context(bad)?,
-                        )
-                    }
-                    "model" => options.model = Some(PathBuf::from(v.as_str().with_context(bad)?)),
-                    "fold_guard" => options.fold_guard = Some(v.as_bool().with_context(bad)?),
-                    "fold_guard_cos" => {
-                        options.fold_guard_cos = Some(
-                            v.as_float()
-                                .or_else(|| v.as_integer().map(|i| i as f64))
-                                .filter(|c| (-1.0..=1.0).contains(c))
-                                .with_context(bad)?,
-                        )
-                    }
-                    "guided_from" => {
-                        options.guided_from =
-                            Some(v.as_integer().filter(|i| *i >= 0).with_context(bad)? as usize)
-                    }
-                    _ => bail!(
-                        "{source}: unknown key `{key}` for normalnet (known: iterations, vertex_iterations, mu_g, model, guided_from, fold_guard, fold_guard_cos)"
-                    ),
-                }
-            }
-        }
-        let mut parts = vec![
+    /// The denoiser column `column` runs on `model` ([`Settings::params`]),
+    /// and a one-line description of its parameters.
+    pub fn denoiser(&self, model: &str, column: &str) -> anyhow::Result<(Denoiser, String)> {
+        let (base, params, sources) = self.params(model, column)?;
+        let d = Denoiser::new(base, &params).with_context(|| {
             format!(
-                "N_f={}",
-                options
-                    .iterations
-                    .map_or("default".into(), |v| v.to_string())
-            ),
-            format!(
-                "N_v={}",
-                options
-                    .vertex_iterations
-                    .map_or("default".into(), |v| v.to_string())
-            ),
-            format!(
-                "mu_g={}",
-                options.mu_g.map_or("default".into(), |v| v.to_string())
-            ),
-        ];
-        if let Some(m) = &options.model {
-            parts.push(format!("model={}", m.display()));
-        }
-        if let Some(g) = options.guided_from {
-            parts.push(format!("guided_from={g}"));
-        }
-        if let Some(g) = options.fold_guard {
-            parts.push(format!("fold_guard={g}"));
-        }
-        if let Some(c) = options.fold_guard_cos {
-            parts.push(format!("fold_guard_cos={c}"));
-        }
-        Ok((options, parts.join(" ")))
+                "settings for {column} on {model} (from {})",
+                if sources.is_empty() {
+                    "defaults"
+                } else {
+                    &sources
+                }
+            )
+        })?;
+        let described = describe(&d.parameters());
+        Ok((d, described))
     }
 }
 
 /// The method a column name runs: the name itself when it is `normalnet` or
 /// a classical method, else the part before the first `-` when that is one
 /// (a variant such as `gnf-ref` or `l0-lambda0.1`, with its own settings).
-pub fn base_method(name: &str) -> Option<String> {
-    let known = |m: &str| m == NORMALNET || m == ORACLE || Method::from_name(m).is_ok();
-    if known(name) {
-        return Some(name.to_string());
+pub fn base_method(name: &str) -> Option<&'static str> {
+    let known = |m: &str| normalnet_denoise::find(m).ok().map(|i| i.name);
+    if let Some(base) = known(name) {
+        return Some(base);
     }
     let (prefix, _) = name.split_once('-')?;
-    known(prefix).then(|| prefix.to_ascii_lowercase())
+    known(prefix)
 }
 
 fn view_from_toml(v: &toml::Value) -> anyhow::Result<(f64, f64)> {
@@ -380,15 +288,6 @@ fn view_from_toml(v: &toml::Value) -> anyhow::Result<(f64, f64)> {
         bail!("elevation must be within -90..=90, got {el}");
     }
     Ok((az, el))
-}
-
-/// `key=value` pairs of a params object, in key order.
-fn describe(params: &serde_json::Map<String, Value>) -> String {
-    params
-        .iter()
-        .map(|(k, v)| format!("{k}={v}"))
-        .collect::<Vec<_>>()
-        .join(" ")
 }
 
 /// Folders under `data` holding `Noisy.obj` and `Original.obj`, sorted.
@@ -639,8 +538,10 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let started = Instant::now();
     let settings = Settings::load(args.settings.as_deref())?;
     let methods: Vec<String> = if args.methods.is_empty() {
-        std::iter::once(NORMALNET.to_string())
-            .chain(Method::NAMES.iter().map(|s| s.to_string()))
+        METHODS
+            .iter()
+            .filter(|m| m.kind != Kind::Oracle)
+            .map(|m| m.name.to_string())
             .collect()
     } else {
         args.methods
@@ -651,8 +552,8 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     for m in &methods {
         if m == NOISY || base_method(m).is_none() {
             bail!(
-                "unknown method `{m}` (known: {NORMALNET}, {ORACLE}, {}, or a variant METHOD-NAME with its own settings)",
-                Method::NAMES.join(", ")
+                "unknown method `{m}` (known: {}, or a variant METHOD-NAME with its own settings)",
+                normalnet_denoise::names().join(", ")
             );
         }
     }
@@ -699,7 +600,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     report.unranked = report
         .methods
         .iter()
-        .filter(|m| base_method(m).as_deref() == Some(ORACLE))
+        .filter(|m| base_method(m) == Some(ORACLE))
         .cloned()
         .collect();
     let old_notes = std::mem::take(&mut report.notes);
@@ -813,27 +714,11 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             let bar = Bar::new(quiet);
             let mut params = String::new();
             let outcome = guarded(method, || {
-                let base = base_method(method);
-                let (result, denoise_s) = if base.as_deref() == Some(ORACLE) {
-                    let (p, described) = settings.oracle(model, method)?;
-                    params = described;
-                    let gt_normals = face_normals(&gt);
-                    let t = Instant::now();
-                    let r = gt_guided_gnf(&noisy, &gt_normals, &p, &bar)?;
-                    (r, t.elapsed().as_secs_f64())
-                } else if base.as_deref() == Some(NORMALNET) {
-                    let (options, described) = settings.normalnet(model, method)?;
-                    params = described;
-                    let t = Instant::now();
-                    let r = denoise_normalnet::denoise(&noisy, &options, &bar)?;
-                    (r, t.elapsed().as_secs_f64())
-                } else {
-                    let (m, described) = settings.classical(model, method)?;
-                    params = described;
-                    let t = Instant::now();
-                    let r = m.denoise(&noisy, &bar)?;
-                    (r, t.elapsed().as_secs_f64())
-                };
+                let (denoiser, described) = settings.denoiser(model, method)?;
+                params = described;
+                let t = Instant::now();
+                let result = denoiser.denoise(&noisy, Some(&gt), &bar)?;
+                let denoise_s = t.elapsed().as_secs_f64();
                 let metrics = compare(&gt, &result).context("metrics of the result")?;
                 Ok((result, denoise_s, metrics))
             });
@@ -918,26 +803,28 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
 mod tests {
     use super::*;
 
+    fn given(s: &Settings, model: &str, column: &str) -> Params {
+        s.params(model, column).unwrap().1
+    }
+
     #[test]
     fn builtin_settings_parse_and_apply_table_2() {
         let s = Settings::parse(BUILTIN_SETTINGS, "builtin").unwrap();
-        let (opts, desc) = s.normalnet("Fandisk0.3", NORMALNET).unwrap();
-        assert_eq!(
-            (opts.iterations, opts.vertex_iterations, opts.mu_g),
-            (Some(10), Some(20), Some(0.25))
-        );
+        let nn = |model: &str| {
+            let p = given(&s, model, NORMALNET);
+            (
+                p["iterations"].clone(),
+                p["vertex_iterations"].clone(),
+                p["mu_g"].clone(),
+            )
+        };
+        assert_eq!(nn("Fandisk0.3"), (10.into(), 20.into(), 0.25.into()));
+        assert_eq!(nn("Bunny0.2"), (2.into(), 5.into(), 0.3.into()));
+        assert_eq!(nn("SharpSphere0.3"), (10.into(), 20.into(), 0.35.into()));
+        let (d, desc) = s.denoiser("Fandisk0.3", NORMALNET).unwrap();
+        assert_eq!(d.name(), NORMALNET);
         assert!(desc.contains("mu_g=0.25"), "{desc}");
-        let (opts, _) = s.normalnet("Bunny0.2", NORMALNET).unwrap();
-        assert_eq!(
-            (opts.iterations, opts.vertex_iterations, opts.mu_g),
-            (Some(2), Some(5), Some(0.3))
-        );
-        let (opts, _) = s.normalnet("SharpSphere0.3", NORMALNET).unwrap();
-        assert_eq!(
-            (opts.iterations, opts.vertex_iterations, opts.mu_g),
-            (Some(10), Some(20), Some(0.35))
-        );
-        let (_, desc) = s.classical("Twelve0.5Impulsive", "gnf").unwrap();
+        let (_, desc) = s.denoiser("Twelve0.5Impulsive", "gnf").unwrap();
         assert!(
             desc.contains("normal_iterations=25") && desc.contains("mu_g=0.3"),
             "{desc}"
@@ -946,9 +833,10 @@ mod tests {
 
     #[test]
     fn variants_run_their_base_method_with_their_own_settings() {
-        assert_eq!(base_method("gnf").as_deref(), Some("gnf"));
-        assert_eq!(base_method("gnf-ref").as_deref(), Some("gnf"));
-        assert_eq!(base_method("normalnet-fast").as_deref(), Some(NORMALNET));
+        assert_eq!(base_method("gnf"), Some("gnf"));
+        assert_eq!(base_method("gnf-ref"), Some("gnf"));
+        assert_eq!(base_method("normalnet-fast"), Some(NORMALNET));
+        assert_eq!(base_method("gt-gnf"), Some(ORACLE));
         assert_eq!(base_method("nosuch-x"), None);
         assert_eq!(base_method("gnfx"), None);
         let s = Settings::parse(
@@ -956,8 +844,8 @@ mod tests {
             "f.toml",
         )
         .unwrap();
-        let (_, plain) = s.classical("M", "gnf").unwrap();
-        let (_, variant) = s.classical("M", "gnf-ref").unwrap();
+        let (_, plain) = s.denoiser("M", "gnf").unwrap();
+        let (_, variant) = s.denoiser("M", "gnf-ref").unwrap();
         assert!(
             plain.contains("mu_g=0.25") && plain.contains("normal_iterations=20"),
             "{plain}"
@@ -971,18 +859,30 @@ mod tests {
     #[test]
     fn oracle_follows_the_normalnet_settings_then_its_own() {
         let s = Settings::parse(BUILTIN_SETTINGS, "builtin").unwrap();
-        let (p, desc) = s.oracle("Block0.4", ORACLE).unwrap();
-        assert_eq!((p.iterations, p.vertex_iterations, p.mu_g), (20, 30, 0.3));
+        let (d, desc) = s.denoiser("Block0.4", ORACLE).unwrap();
+        let p = d.parameters();
+        assert_eq!(
+            (
+                p["iterations"].clone(),
+                p["vertex_iterations"].clone(),
+                p["mu_g"].clone()
+            ),
+            (20.into(), 30.into(), 0.3.into())
+        );
         assert!(desc.contains("sigma_s_over_ds=2.0"), "{desc}");
         let s = Settings::parse(
             "[defaults.normalnet]\niterations = 4\nmodel = \"x\"\n[defaults.oracle]\nmu_g = 0.5\n",
             "f.toml",
         )
         .unwrap();
-        let (p, _) = s.oracle("M", ORACLE).unwrap();
-        assert_eq!((p.iterations, p.mu_g), (4, 0.5));
+        let p = given(&s, "M", ORACLE);
+        assert_eq!(
+            (p["iterations"].clone(), p["mu_g"].clone()),
+            (4.into(), 0.5.into())
+        );
+        assert!(p.get("model").is_none());
         let s = Settings::parse("[defaults.oracle]\nbogus = 1\n", "f.toml").unwrap();
-        assert!(s.oracle("M", ORACLE).is_err());
+        assert!(s.denoiser("M", ORACLE).is_err());
     }
 
     #[test]
@@ -993,10 +893,14 @@ mod tests {
             "{e:#}"
         );
         let s = Settings::parse("[models.\"M\".gnf]\nitersx = 3\n", "f.toml").unwrap();
-        let e = s.classical("M", "gnf").unwrap_err();
-        assert!(format!("{e:#}").contains("unknown key `itersx`"), "{e:#}");
+        let e = s.denoiser("M", "gnf").unwrap_err();
+        let e = format!("{e:#}");
+        assert!(
+            e.contains("unknown parameter `itersx`") && e.contains("f.toml: [models.\"M\".gnf]"),
+            "{e}"
+        );
         let s = Settings::parse("[defaults.normalnet]\nmu_g = \"a\"\n", "f.toml").unwrap();
-        assert!(s.normalnet("M", NORMALNET).is_err());
+        assert!(s.denoiser("M", NORMALNET).is_err());
         assert!(Settings::parse("[models.\"M\"]\nview = [0, 100]\n", "f.toml").is_err());
         assert!(Settings::parse("[models.\"M\"]\nskip = [\"nosuch\"]\n", "f.toml").is_err());
         let s = Settings::parse("[models.\"M\"]\nskip = [\"normalnet\"]\n", "f.toml").unwrap();

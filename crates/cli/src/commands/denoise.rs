@@ -1,184 +1,68 @@
-//! `normalnet denoise IN OUT`: denoises a mesh with NormalNet (the default,
-//! SPEC §7) or a classical method of `normalnet_filters` (SPEC §4, §9), writes
-//! the result atomically with the input's vertex and face order, and prints
-//! timings (the denoising call alone and the whole command), the parameters
-//! and, with `--gt`, the error metrics (SPEC §3).
+//! `normalnet denoise IN OUT`: denoises a mesh with any registered method
+//! of `normalnet_denoise` (NormalNet by default, SPEC §7; the classical
+//! filters, SPEC §4, §9; the oracle), writes the result atomically with the
+//! input's vertex and face order, and prints timings (the denoising call
+//! alone and the whole command), the parameters and, with `--gt`, the error
+//! metrics (SPEC §3).
 //!
-//! Method parameters are optional flags; an absent flag keeps the default of
-//! the method's params struct (`GnfParams::default()`, ...), which is also
-//! what `--help` shows. A flag that does not apply to the chosen method is an
-//! error rather than silently ignored.
+//! Parameters: shorthand flags (`--iterations`, `--mu-g`, ...; each method's
+//! registry entry says which it takes and which parameter each sets) and
+//! `--param KEY=VALUE` for any field of the method's parameters. Absent ones
+//! keep the method's defaults, which `--help` shows. A flag that does not
+//! apply to the chosen method is an error rather than silently ignored.
 //!
 //! Outlier vertices (issue 14, `normalnet_mesh::outliers`) are warned about
-//! on reading; every method, NormalNet included, leaves them and their
-//! faces out of the denoising and in place, and `--remove-outliers` drops
-//! them (and their faces) from the output instead.
+//! on reading; every method leaves them and their faces out of the
+//! denoising and in place, and `--remove-outliers` drops them (and their
+//! faces) from the output instead.
 
-use super::denoise_normalnet::{self, NormalnetOptions};
 use crate::input::read_mesh;
 use crate::output;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
-use normalnet_filters::{
-    BiParams, BnfParams, GnfParams, GtGuidedGnfParams, L0Params, Method, Sun07Params, VtParams,
-    gt_guided_gnf,
-};
-use normalnet_mesh::geometry::face_normals;
+use normalnet_denoise::params::parse_assignment;
+use normalnet_denoise::{Denoiser, METHODS, MethodInfo, Params};
 use normalnet_mesh::metrics::compare;
-use normalnet_mesh::outliers::{OutlierParams, denoise_around, outlier_vertices, without_vertices};
+use normalnet_mesh::outliers::{OutlierParams, outlier_vertices, without_vertices};
 use normalnet_mesh::{Mesh, write_mesh};
-use serde_json::json;
+use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// The denoising methods of `--method`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum MethodName {
-    /// NormalNet (learned normal filtering, SPEC §7)
-    Normalnet,
-    /// guided mesh normal filtering (Zhang et al. 2015)
-    Gnf,
-    /// GNF guided by ground-truth normals (needs --gt; the oracle)
-    GtGnf,
-    /// bilateral normal filtering, local scheme (Zheng et al. 2011)
-    Bnf,
-    /// fast and effective feature-preserving denoising (Sun et al. 2007)
-    Sun07,
-    /// L0 minimisation (He & Schaefer 2013)
-    L0,
-    /// bi-normal filtering, core scheme (Wei et al. 2015)
-    Bi,
-    /// normal voting tensor + binary optimisation (Yadav et al. 2018)
-    Vt,
+/// Every registered name and alias, for `--method`.
+fn method_names() -> Vec<&'static str> {
+    METHODS
+        .iter()
+        .flat_map(|m| std::iter::once(m.name).chain(m.aliases.iter().copied()))
+        .collect()
 }
 
-fn help_iterations() -> String {
-    format!(
-        "Normal-filtering iterations N_f [defaults: normalnet 10, gnf {}, gt-gnf {}, bnf {}, sun07 {}, bi {}, vt {}]",
-        GnfParams::default().normal_iterations,
-        GtGuidedGnfParams::default().iterations,
-        BnfParams::default().normal_iterations,
-        Sun07Params::default().normal_iterations,
-        BiParams::default().normal_iterations,
-        VtParams::default().normal_iterations
-    )
+/// `text` followed by each method's default for the parameter `flag` sets.
+fn flag_help(flag: &str, text: &str) -> String {
+    let defaults: Vec<String> = METHODS
+        .iter()
+        .filter_map(|m| {
+            let field = m.flag_field(flag)?;
+            let v = (m.defaults)().get(field).cloned()?;
+            Some(format!("{} {v}", m.name))
+        })
+        .collect();
+    format!("{text} [defaults: {}]", defaults.join(", "))
 }
 
-fn help_vertex_iterations() -> String {
-    format!(
-        "Vertex-update passes N_v (per iteration for normalnet/gnf/gt-gnf/bi/vt, after all normal passes for bnf/sun07) \
-         [defaults: normalnet 20, gnf {}, gt-gnf {}, bnf {}, sun07 {}, bi {}, vt {}]",
-        GnfParams::default().vertex_iterations,
-        GtGuidedGnfParams::default().vertex_iterations,
-        BnfParams::default().vertex_iterations,
-        Sun07Params::default().vertex_iterations,
-        BiParams::default().vertex_iterations,
-        VtParams::default().vertex_iterations
-    )
-}
-
-fn help_mu_g() -> String {
-    format!(
-        "μ_g (σ_r of GNF): width of the guidance range kernel [defaults: normalnet 0.35 (nearest trained output), \
-         gnf {}, gt-gnf {}]",
-        GnfParams::default().mu_g,
-        GtGuidedGnfParams::default().mu_g
-    )
-}
-
-fn help_sigma_s() -> String {
-    format!(
-        "Spatial kernel width σ_s in units of the mean centre distance d_s [defaults: gnf {}, gt-gnf {}, bnf {}, bi {}]",
-        GnfParams::default().sigma_s_over_ds,
-        GtGuidedGnfParams::default().sigma_s_over_ds,
-        BnfParams::default().sigma_s_over_ds,
-        BiParams::default().sigma_s_over_ds
-    )
-}
-
-fn help_radius() -> String {
-    format!(
-        "Neighbourhood radius: gnf in units of d_s, vt (r) in units of the mean edge length l_e \
-         [defaults: gnf {}, vt {}]",
-        GnfParams::default().radius_over_ds,
-        VtParams::default().radius_over_le
-    )
-}
-
-fn help_sigma_r() -> String {
-    format!(
-        "σ_r: range kernel width on normal differences (bnf) or on the vertex-normal guidance (bi) \
-         [defaults: bnf {}, bi {}]",
-        BnfParams::default().sigma_r,
-        BiParams::default().sigma_r
-    )
-}
-
-fn help_sigma_n() -> String {
-    format!(
-        "BI σ_n: width of the kernel keeping a corner's vertex normal on its side of a feature [default: {}]",
-        BiParams::default().sigma_n
-    )
-}
-
-fn help_rho() -> String {
-    format!(
-        "VT ρ: a neighbour votes only if n_i·n_j ≥ ρ [default: {}]",
-        VtParams::default().rho
-    )
-}
-
-fn help_tau() -> String {
-    format!(
-        "VT τ: binary-optimisation threshold on the normalised eigenvalues [default: {}]",
-        VtParams::default().tau
-    )
-}
-
-fn help_threshold() -> String {
-    format!(
-        "Sun07 threshold T on n_i·n_j [default: {}]",
-        Sun07Params::default().threshold
-    )
-}
-
-fn help_lambda() -> String {
-    format!(
-        "L0 λ in units of l_e² (mean edge length squared) [default: {}]",
-        L0Params::default().lambda_over_le2
-    )
-}
-
-fn help_kappa() -> String {
-    format!(
-        "L0 κ: growth of β per iteration [default: {}]",
-        L0Params::default().kappa
-    )
-}
-
-fn help_beta0() -> String {
-    format!("L0 β_0: initial β [default: {}]", L0Params::default().beta0)
-}
-
-fn help_beta_max() -> String {
-    format!(
-        "L0 β_max: stop once β exceeds it [default: {}]",
-        L0Params::default().beta_max
-    )
-}
-
-fn help_alpha0() -> String {
-    format!(
-        "L0 α_0 in units of the mean dihedral angle γ̄ [default: {}]",
-        L0Params::default().alpha0_over_gamma
-    )
-}
-
-fn help_alpha_decay() -> String {
-    format!(
-        "L0 μ_α: decay of α per iteration [default: {}]",
-        L0Params::default().alpha_decay
-    )
+fn method_help() -> String {
+    let lines: Vec<String> = METHODS
+        .iter()
+        .map(|m| {
+            let aliases = if m.aliases.is_empty() {
+                String::new()
+            } else {
+                format!(" (also {})", m.aliases.join(", "))
+            };
+            format!("{}{aliases}: {}", m.name, m.summary)
+        })
+        .collect();
+    format!("Denoising method:\n{}", lines.join("\n"))
 }
 
 /// Arguments of `normalnet denoise`.
@@ -189,57 +73,73 @@ pub struct Args {
     /// Output mesh (format from the extension; written atomically).
     pub output: PathBuf,
     /// Denoising method.
-    #[arg(long, short, value_enum, default_value_t = MethodName::Normalnet)]
-    pub method: MethodName,
+    #[arg(long, short, default_value = "normalnet", long_help = method_help(),
+          value_parser = clap::builder::PossibleValuesParser::new(method_names()))]
+    pub method: String,
     /// N_f.
-    #[arg(long, help = help_iterations())]
+    #[arg(long, help = flag_help("iterations", "Normal-filtering iterations N_f"))]
     pub iterations: Option<usize>,
     /// N_v.
-    #[arg(long, help = help_vertex_iterations())]
+    #[arg(long, help = flag_help("vertex-iterations",
+        "Vertex-update passes N_v (per iteration; bnf/sun07: after all normal passes)"))]
     pub vertex_iterations: Option<usize>,
     /// μ_g.
-    #[arg(long, allow_negative_numbers = true, help = help_mu_g())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("mu-g",
+        "μ_g: width of the guidance range kernel (normalnet: the nearest trained output)"))]
     pub mu_g: Option<f64>,
     /// σ_s / d_s.
-    #[arg(long, allow_negative_numbers = true, help = help_sigma_s())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("sigma-s",
+        "Spatial kernel width σ_s in units of the mean centre distance d_s"))]
     pub sigma_s: Option<f64>,
     /// GNF radius / d_s.
-    #[arg(long, allow_negative_numbers = true, help = help_radius())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("radius",
+        "Neighbourhood radius: gnf in units of d_s, vt (r) in units of the mean edge length l_e"))]
     pub radius: Option<f64>,
     /// BNF/BI σ_r.
-    #[arg(long, allow_negative_numbers = true, help = help_sigma_r())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("sigma-r",
+        "σ_r: range kernel width on normal differences (bnf) or on the vertex-normal guidance (bi)"))]
     pub sigma_r: Option<f64>,
     /// BI σ_n.
-    #[arg(long, allow_negative_numbers = true, help = help_sigma_n())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("sigma-n",
+        "BI σ_n: width of the kernel keeping a corner's vertex normal on its side of a feature"))]
     pub sigma_n: Option<f64>,
     /// VT ρ.
-    #[arg(long, allow_negative_numbers = true, help = help_rho())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("rho",
+        "VT ρ: a neighbour votes only if n_i·n_j ≥ ρ"))]
     pub rho: Option<f64>,
     /// VT τ.
-    #[arg(long, allow_negative_numbers = true, help = help_tau())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("tau",
+        "VT τ: binary-optimisation threshold on the normalised eigenvalues"))]
     pub tau: Option<f64>,
     /// Sun07 T.
-    #[arg(long, allow_negative_numbers = true, help = help_threshold())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("threshold",
+        "Sun07 threshold T on n_i·n_j"))]
     pub threshold: Option<f64>,
     /// L0 λ / l_e².
-    #[arg(long, allow_negative_numbers = true, help = help_lambda())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("lambda",
+        "L0 λ in units of l_e² (mean edge length squared)"))]
     pub lambda: Option<f64>,
     /// L0 κ.
-    #[arg(long, allow_negative_numbers = true, help = help_kappa())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("kappa",
+        "L0 κ: growth of β per iteration"))]
     pub kappa: Option<f64>,
     /// L0 β_0.
-    #[arg(long, allow_negative_numbers = true, help = help_beta0())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("beta0", "L0 β_0: initial β"))]
     pub beta0: Option<f64>,
     /// L0 β_max.
-    #[arg(long, allow_negative_numbers = true, help = help_beta_max())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("beta-max",
+        "L0 β_max: stop once β exceeds it"))]
     pub beta_max: Option<f64>,
     /// L0 α_0 / γ̄.
-    #[arg(long, allow_negative_numbers = true, help = help_alpha0())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("alpha0",
+        "L0 α_0 in units of the mean dihedral angle γ̄"))]
     pub alpha0: Option<f64>,
     /// L0 μ_α.
-    #[arg(long, allow_negative_numbers = true, help = help_alpha_decay())]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("alpha-decay",
+        "L0 μ_α: decay of α per iteration"))]
     pub alpha_decay: Option<f64>,
-    /// NormalNet model bundle folder (default: the shipped bundle).
+    /// NormalNet model bundle folder (default: `$NORMALNET_MODEL`, else the
+    /// bundle built into the program).
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// NormalNet: from this filtering iteration on, the network's normals
@@ -248,6 +148,11 @@ pub struct Args {
     /// the paper's form).
     #[arg(long)]
     pub guided_from: Option<usize>,
+    /// Any parameter of the method, by its field name (see `--json` output
+    /// for the names), e.g. `--param fold_guard_cos=0` or `-p mu_g=0.3`;
+    /// repeatable. The value is read as JSON when it parses, else as text.
+    #[arg(long = "param", short = 'p', value_name = "KEY=VALUE", value_parser = parse_assignment)]
+    pub params: Vec<(String, Value)>,
     /// Ground-truth mesh: print error metrics of the result (required by gt-gnf).
     #[arg(long)]
     pub gt: Option<PathBuf>,
@@ -270,239 +175,54 @@ pub struct Args {
     pub no_fold_guard: bool,
 }
 
-/// The classical parameters or NormalNet options chosen by the flags.
-enum Chosen {
-    Normalnet(NormalnetOptions),
-    Classical(Method),
-    GtGuided(GtGuidedGnfParams),
-}
-
-/// Rejects flags that the chosen method does not use.
-fn reject_unused(args: &Args, used: &[&str]) -> anyhow::Result<()> {
-    let given: [(&str, bool); 19] = [
-        ("iterations", args.iterations.is_some()),
-        ("vertex-iterations", args.vertex_iterations.is_some()),
-        ("mu-g", args.mu_g.is_some()),
-        ("sigma-s", args.sigma_s.is_some()),
-        ("radius", args.radius.is_some()),
-        ("sigma-r", args.sigma_r.is_some()),
-        ("sigma-n", args.sigma_n.is_some()),
-        ("rho", args.rho.is_some()),
-        ("tau", args.tau.is_some()),
-        ("threshold", args.threshold.is_some()),
-        ("lambda", args.lambda.is_some()),
-        ("kappa", args.kappa.is_some()),
-        ("beta0", args.beta0.is_some()),
-        ("beta-max", args.beta_max.is_some()),
-        ("alpha0", args.alpha0.is_some()),
-        ("alpha-decay", args.alpha_decay.is_some()),
-        ("model", args.model.is_some()),
-        ("guided-from", args.guided_from.is_some()),
-        ("no-fold-guard", args.no_fold_guard),
+/// The parameters the flags give for `info` (shorthand flags mapped onto
+/// their fields, then `--param`); a flag the method does not take is an
+/// error.
+fn given_params(args: &Args, info: &MethodInfo) -> anyhow::Result<Params> {
+    let num = |v: Option<f64>| v.map(Value::from);
+    let int = |v: Option<usize>| v.map(Value::from);
+    let given: [(&str, Option<Value>); 19] = [
+        ("iterations", int(args.iterations)),
+        ("vertex-iterations", int(args.vertex_iterations)),
+        ("mu-g", num(args.mu_g)),
+        ("sigma-s", num(args.sigma_s)),
+        ("radius", num(args.radius)),
+        ("sigma-r", num(args.sigma_r)),
+        ("sigma-n", num(args.sigma_n)),
+        ("rho", num(args.rho)),
+        ("tau", num(args.tau)),
+        ("threshold", num(args.threshold)),
+        ("lambda", num(args.lambda)),
+        ("kappa", num(args.kappa)),
+        ("beta0", num(args.beta0)),
+        ("beta-max", num(args.beta_max)),
+        ("alpha0", num(args.alpha0)),
+        ("alpha-decay", num(args.alpha_decay)),
+        (
+            "model",
+            args.model
+                .as_ref()
+                .map(|p| Value::from(p.display().to_string())),
+        ),
+        ("guided-from", int(args.guided_from)),
+        // a `no-` flag sets its boolean parameter to false
+        (
+            "no-fold-guard",
+            args.no_fold_guard.then_some(Value::Bool(false)),
+        ),
     ];
-    for (flag, present) in given {
-        if present && !used.contains(&flag) {
-            bail!(
-                "--{flag} does not apply to --method {}",
-                method_label(args.method)
-            );
-        }
+    let mut params = Params::new();
+    for (flag, value) in given {
+        let Some(value) = value else { continue };
+        let Some(field) = info.flag_field(flag) else {
+            bail!("--{flag} does not apply to --method {}", info.name);
+        };
+        params.insert(field.to_string(), value);
     }
-    Ok(())
-}
-
-fn method_label(m: MethodName) -> &'static str {
-    match m {
-        MethodName::Normalnet => "normalnet",
-        MethodName::Gnf => "gnf",
-        MethodName::GtGnf => "gt-gnf",
-        MethodName::Bnf => "bnf",
-        MethodName::Sun07 => "sun07",
-        MethodName::L0 => "l0",
-        MethodName::Bi => "bi",
-        MethodName::Vt => "vt",
+    for (key, value) in &args.params {
+        params.insert(key.clone(), value.clone());
     }
-}
-
-fn choose(args: &Args) -> anyhow::Result<Chosen> {
-    fn set<T: Copy>(field: &mut T, value: Option<T>) {
-        if let Some(v) = value {
-            *field = v;
-        }
-    }
-    let chosen = match args.method {
-        MethodName::Normalnet => {
-            reject_unused(
-                args,
-                &[
-                    "iterations",
-                    "vertex-iterations",
-                    "mu-g",
-                    "model",
-                    "guided-from",
-                ],
-            )?;
-            if args.vertex_iterations == Some(0) {
-                bail!(
-                    "--vertex-iterations 0 with --method normalnet would run the whole network and \
-                     return the input unchanged (NormalNet moves vertices only in its vertex-update \
-                     passes); give at least 1 (default 20)"
-                );
-            }
-            let options = NormalnetOptions {
-                model: args.model.clone(),
-                iterations: args.iterations,
-                vertex_iterations: args.vertex_iterations,
-                mu_g: args.mu_g,
-                guided_from: args.guided_from,
-                fold_guard: args.no_fold_guard.then_some(false),
-                fold_guard_cos: None,
-            };
-            // the ranges, before the bundle and the mesh are loaded
-            denoise_normalnet::params(&options).validate()?;
-            Chosen::Normalnet(options)
-        }
-        MethodName::Gnf => {
-            reject_unused(
-                args,
-                &[
-                    "iterations",
-                    "vertex-iterations",
-                    "mu-g",
-                    "sigma-s",
-                    "radius",
-                    "no-fold-guard",
-                ],
-            )?;
-            let mut p = GnfParams::default();
-            set(&mut p.normal_iterations, args.iterations);
-            set(&mut p.vertex_iterations, args.vertex_iterations);
-            set(&mut p.mu_g, args.mu_g);
-            set(&mut p.sigma_s_over_ds, args.sigma_s);
-            set(&mut p.radius_over_ds, args.radius);
-            p.fold_guard &= !args.no_fold_guard;
-            Chosen::Classical(Method::Gnf(p))
-        }
-        MethodName::GtGnf => {
-            reject_unused(
-                args,
-                &["iterations", "vertex-iterations", "mu-g", "sigma-s"],
-            )?;
-            if args.gt.is_none() {
-                bail!("--method gt-gnf needs the ground truth: pass --gt GT");
-            }
-            let mut p = GtGuidedGnfParams::default();
-            set(&mut p.iterations, args.iterations);
-            set(&mut p.vertex_iterations, args.vertex_iterations);
-            set(&mut p.mu_g, args.mu_g);
-            set(&mut p.sigma_s_over_ds, args.sigma_s);
-            p.validate()?;
-            Chosen::GtGuided(p)
-        }
-        MethodName::Bnf => {
-            reject_unused(
-                args,
-                &[
-                    "iterations",
-                    "vertex-iterations",
-                    "sigma-s",
-                    "sigma-r",
-                    "no-fold-guard",
-                ],
-            )?;
-            let mut p = BnfParams::default();
-            set(&mut p.normal_iterations, args.iterations);
-            set(&mut p.vertex_iterations, args.vertex_iterations);
-            set(&mut p.sigma_s_over_ds, args.sigma_s);
-            set(&mut p.sigma_r, args.sigma_r);
-            p.fold_guard &= !args.no_fold_guard;
-            Chosen::Classical(Method::Bnf(p))
-        }
-        MethodName::Sun07 => {
-            reject_unused(
-                args,
-                &[
-                    "iterations",
-                    "vertex-iterations",
-                    "threshold",
-                    "no-fold-guard",
-                ],
-            )?;
-            let mut p = Sun07Params::default();
-            set(&mut p.normal_iterations, args.iterations);
-            set(&mut p.vertex_iterations, args.vertex_iterations);
-            set(&mut p.threshold, args.threshold);
-            p.fold_guard &= !args.no_fold_guard;
-            Chosen::Classical(Method::Sun07(p))
-        }
-        MethodName::L0 => {
-            reject_unused(
-                args,
-                &[
-                    "lambda",
-                    "kappa",
-                    "beta0",
-                    "beta-max",
-                    "alpha0",
-                    "alpha-decay",
-                ],
-            )?;
-            let mut p = L0Params::default();
-            set(&mut p.lambda_over_le2, args.lambda);
-            set(&mut p.kappa, args.kappa);
-            set(&mut p.beta0, args.beta0);
-            set(&mut p.beta_max, args.beta_max);
-            set(&mut p.alpha0_over_gamma, args.alpha0);
-            set(&mut p.alpha_decay, args.alpha_decay);
-            Chosen::Classical(Method::L0(p))
-        }
-        MethodName::Bi => {
-            reject_unused(
-                args,
-                &[
-                    "iterations",
-                    "vertex-iterations",
-                    "sigma-s",
-                    "sigma-r",
-                    "sigma-n",
-                    "no-fold-guard",
-                ],
-            )?;
-            let mut p = BiParams::default();
-            set(&mut p.normal_iterations, args.iterations);
-            set(&mut p.vertex_iterations, args.vertex_iterations);
-            set(&mut p.sigma_s_over_ds, args.sigma_s);
-            set(&mut p.sigma_r, args.sigma_r);
-            set(&mut p.sigma_n, args.sigma_n);
-            p.fold_guard &= !args.no_fold_guard;
-            Chosen::Classical(Method::Bi(p))
-        }
-        MethodName::Vt => {
-            reject_unused(
-                args,
-                &[
-                    "iterations",
-                    "vertex-iterations",
-                    "radius",
-                    "rho",
-                    "tau",
-                    "no-fold-guard",
-                ],
-            )?;
-            let mut p = VtParams::default();
-            set(&mut p.normal_iterations, args.iterations);
-            set(&mut p.vertex_iterations, args.vertex_iterations);
-            set(&mut p.radius_over_le, args.radius);
-            set(&mut p.rho, args.rho);
-            set(&mut p.tau, args.tau);
-            p.fold_guard &= !args.no_fold_guard;
-            Chosen::Classical(Method::Vt(p))
-        }
-    };
-    if let Chosen::Classical(m) = &chosen {
-        m.validate()?;
-    }
-    Ok(chosen)
+    Ok(params)
 }
 
 /// What `--remove-outliers` dropped.
@@ -542,8 +262,16 @@ fn remove_outliers(mesh: Mesh) -> (Mesh, Option<Removed>) {
 /// Runs `normalnet denoise`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let t_total = Instant::now();
-    let chosen = choose(&args)?;
+    let info = normalnet_denoise::find(&args.method)?;
+    if info.needs_gt() && args.gt.is_none() {
+        bail!(
+            "--method {} reads the ground truth: pass --gt GT",
+            args.method
+        );
+    }
     output::check_file(&args.output, output::MESH, "output mesh")?;
+    // parameters checked and the model loaded before the mesh is read
+    let denoiser = Denoiser::new(info.name, &given_params(&args, info)?)?;
     let mesh =
         read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
     let (mesh, removed) = if args.remove_outliers {
@@ -586,43 +314,11 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     };
     let progress = Bar::new(quiet);
     let t_denoise = Instant::now();
-    let mut stages = None;
-    let (result, parameters) = match &chosen {
-        Chosen::Normalnet(options) => {
-            // outliers and their faces stay in place, as for the classical methods
-            let out = denoise_around(&mesh, |m| {
-                let (out, times) = denoise_normalnet::denoise_with_stages(m, options, &progress)?;
-                stages = Some(times);
-                anyhow::Ok(out)
-            })?;
-            let parameters = json!({
-                "model": options.model,
-                "iterations": options.iterations,
-                "vertex_iterations": options.vertex_iterations,
-                "mu_g": options.mu_g,
-                "guided_from": options.guided_from,
-            });
-            (out, parameters)
-        }
-        Chosen::Classical(method) => {
-            let out = method.denoise(&mesh, &progress).with_context(|| {
-                format!("denoising {} with {}", args.input.display(), method.name())
-            })?;
-            // The params struct of the variant, without the enum tag.
-            let tagged = serde_json::to_value(method)?;
-            let parameters = tagged
-                .as_object()
-                .and_then(|o| o.values().next().cloned())
-                .unwrap_or(tagged);
-            (out, parameters)
-        }
-        Chosen::GtGuided(params) => {
-            let gt = gt.as_ref().context("--method gt-gnf needs --gt")?;
-            let out = gt_guided_gnf(&mesh, &face_normals(gt), params, &progress)
-                .with_context(|| format!("denoising {} with gt-gnf", args.input.display()))?;
-            (out, serde_json::to_value(params)?)
-        }
-    };
+    let outcome = denoiser
+        .run(&mesh, gt.as_ref(), &progress)
+        .with_context(|| format!("denoising {} with {}", args.input.display(), info.name))?;
+    let (result, stages) = (outcome.mesh, outcome.stages);
+    let parameters = denoiser.parameters();
     let denoise_seconds = t_denoise.elapsed().as_secs_f64();
     write_mesh(&args.output, &result)
         .with_context(|| format!("writing {}", args.output.display()))?;
@@ -631,7 +327,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         None => None,
     };
     let total_seconds = t_total.elapsed().as_secs_f64();
-    let method = method_label(args.method);
+    let method = info.name;
     if args.json {
         let v = json!({
             "input": args.input,

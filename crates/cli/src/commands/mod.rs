@@ -3,7 +3,6 @@
 pub mod bench;
 pub mod dataset;
 pub mod denoise;
-pub mod denoise_normalnet;
 pub mod info;
 pub mod metrics;
 pub mod models;

@@ -4,9 +4,8 @@
 
 use std::path::PathBuf;
 
+use normalnet_denoise::normalnet::NormalnetParams;
 use normalnet_net::Bundle;
-
-use super::denoise_normalnet::{NormalnetOptions, load_bundle};
 
 /// Arguments of `normalnet models`.
 #[derive(clap::Args)]
@@ -41,10 +40,11 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     if let Some(Action::Convert { from, to }) = &args.action {
         return convert(from, to);
     }
-    let bundle = load_bundle(&NormalnetOptions {
+    let bundle = NormalnetParams {
         model: args.model.clone(),
-        ..NormalnetOptions::default()
-    })?;
+        ..NormalnetParams::default()
+    }
+    .load_bundle()?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&bundle.manifest)?);
     } else {

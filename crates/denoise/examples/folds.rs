@@ -2,9 +2,10 @@
 //! truth's) and E_a of the noisy input and of every classical method with
 //! the fold guard off and on.
 //!
-//! `cargo run -p normalnet-filters --example folds -- NOISY CLEAN [NOISY CLEAN ...]`
+//! `cargo run --release -p normalnet-denoise --example folds -- NOISY CLEAN [NOISY CLEAN ...]`
+//! (every registered method but the oracle; NormalNet included)
 
-use normalnet_filters::Method;
+use normalnet_denoise::{Denoiser, Kind, METHODS, Params};
 use normalnet_mesh::metrics::per_face_angle_errors;
 use normalnet_mesh::{Mesh, NoProgress, geometry::face_normals, read_mesh, vec3};
 
@@ -20,18 +21,14 @@ fn score(result: &Mesh, gt: &Mesh) -> (usize, f64) {
     (flipped, e.iter().sum::<f64>() / e.len() as f64)
 }
 
-/// `method` with its fold guard set to `on` (L0 has none).
-fn with_guard(method: &Method, on: bool) -> Method {
-    let mut m = method.clone();
-    match &mut m {
-        Method::Gnf(p) => p.fold_guard = on,
-        Method::Bnf(p) => p.fold_guard = on,
-        Method::Sun07(p) => p.fold_guard = on,
-        Method::Bi(p) => p.fold_guard = on,
-        Method::Vt(p) => p.fold_guard = on,
-        Method::L0(_) => {}
+/// `name` with its fold guard set to `on` (methods without one: defaults).
+fn with_guard(name: &str, on: bool) -> Denoiser {
+    let info = normalnet_denoise::find(name).unwrap();
+    let mut p = Params::new();
+    if (info.defaults)().get("fold_guard").is_some() {
+        p.insert("fold_guard".into(), on.into());
     }
-    m
+    Denoiser::new(name, &p).unwrap()
 }
 
 fn main() {
@@ -48,10 +45,17 @@ fn main() {
             .to_string();
         let (f, e) = score(&noisy, &clean);
         println!("| {name} | noisy | {f} | {f} | {e:.3} | {e:.3} |");
-        for &n in Method::NAMES {
-            let m = Method::from_name(n).unwrap();
-            let off = with_guard(&m, false).denoise(&noisy, &NoProgress).unwrap();
-            let on = with_guard(&m, true).denoise(&noisy, &NoProgress).unwrap();
+        for n in METHODS
+            .iter()
+            .filter(|m| m.kind != Kind::Oracle)
+            .map(|m| m.name)
+        {
+            let off = with_guard(n, false)
+                .denoise(&noisy, None, &NoProgress)
+                .unwrap();
+            let on = with_guard(n, true)
+                .denoise(&noisy, None, &NoProgress)
+                .unwrap();
             let (f0, e0) = score(&off, &clean);
             let (f1, e1) = score(&on, &clean);
             println!("| {name} | {n} | {f0} | {f1} | {e0:.3} | {e1:.3} |");

@@ -1,10 +1,10 @@
 //! Times one method on a generated ~1M-face noisy torus (peak memory: run
 //! under `/usr/bin/time -v`).
 //!
-//! `cargo run --release -p normalnet-filters --example large -- gnf 500`
+//! `cargo run --release -p normalnet-denoise --example large -- gnf 500`
 //! (`rings` R gives 4·R² faces: 500 → 1.0M).
 
-use normalnet_filters::Method;
+use normalnet_denoise::Denoiser;
 use normalnet_mesh::{Mesh, NoProgress};
 use std::time::Instant;
 
@@ -48,9 +48,9 @@ fn main() {
         .map(|s| s.parse().expect("rings"))
         .unwrap_or(500);
     let mesh = torus(rings);
-    let method = Method::from_name(&name).expect("method");
+    let method = Denoiser::with_defaults(&name).expect("method");
     let t = Instant::now();
-    let out = method.denoise(&mesh, &NoProgress).expect("denoise");
+    let out = method.denoise(&mesh, None, &NoProgress).expect("denoise");
     println!(
         "{name}: {} faces, {} vertices, {:.2} s, {} threads, finite: {}",
         mesh.num_faces(),

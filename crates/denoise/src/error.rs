@@ -1,0 +1,39 @@
+//! Errors of `normalnet-denoise`: unknown names, bad parameters (naming the
+//! method and the parameter), a missing ground truth, and the errors of the
+//! methods themselves.
+
+/// Everything that can go wrong in choosing or running a denoiser.
+#[derive(Debug, thiserror::Error)]
+pub enum DenoiseError {
+    /// No registered method has this name.
+    #[error("unknown method {name:?} (known: {known})")]
+    UnknownMethod {
+        /// the name asked for
+        name: String,
+        /// the registered names, comma-separated
+        known: String,
+    },
+    /// A parameter is unknown, of the wrong type or out of range.
+    #[error("{method}: {message}")]
+    Parameter {
+        /// the method's name
+        method: &'static str,
+        /// what is wrong, naming the parameter
+        message: String,
+    },
+    /// The method reads the ground truth and none was given.
+    #[error("{method} reads the ground truth: give the clean mesh")]
+    NeedsGroundTruth {
+        /// the method's name
+        method: &'static str,
+    },
+    /// A classical filter failed.
+    #[error(transparent)]
+    Filter(#[from] normalnet_filters::FilterError),
+    /// NormalNet failed (bundle, network, inference).
+    #[error(transparent)]
+    Net(#[from] normalnet_net::NetError),
+    /// A mesh operation failed.
+    #[error(transparent)]
+    Mesh(#[from] normalnet_mesh::MeshError),
+}

@@ -1,0 +1,214 @@
+//! Every denoiser of the project behind one type, [`Denoiser`]: the
+//! classical filters of `normalnet-filters`, the GT-guided oracle and
+//! NormalNet. One list of names ([`registry::METHODS`]), one parameter
+//! mechanism ([`params`]: a JSON object laid over the method's defaults) for
+//! the CLI's flags, `bench.toml`, and the bindings, one `denoise` call.
+//! No deep-learning framework is needed: NormalNet runs on the CPU engine of
+//! `normalnet-cnn`.
+//!
+//! ```no_run
+//! use normalnet_denoise::{Denoiser, Params};
+//! use normalnet_mesh::{NoProgress, read_mesh};
+//!
+//! let mesh = read_mesh("noisy.obj")?;
+//! let mut params = Params::new();
+//! params.insert("mu_g".into(), 0.3.into());
+//! let gnf = Denoiser::new("gnf", &params)?;
+//! let out = gnf.denoise(&mesh, None, &NoProgress)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! Adding a method: one file (a classical filter implementing
+//! `normalnet_filters::ClassicalMethod`, or a [`registry::Method`] here)
+//! and one line in [`registry::METHODS`].
+
+pub mod error;
+pub mod normalnet;
+pub mod oracle;
+pub mod params;
+pub mod registry;
+
+pub use error::DenoiseError;
+pub use params::Params;
+pub use registry::{Kind, METHODS, Method, MethodInfo, Outcome, find, names};
+
+use normalnet_mesh::{Mesh, Progress};
+use serde_json::Value;
+
+/// A denoiser ready to run: a registered method with its parameters
+/// resolved and checked, and its model loaded.
+pub struct Denoiser {
+    info: &'static MethodInfo,
+    method: Box<dyn Method>,
+}
+
+impl std::fmt::Debug for Denoiser {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Denoiser")
+            .field("method", &self.info.name)
+            .field("parameters", &self.parameters())
+            .finish()
+    }
+}
+
+impl Denoiser {
+    /// The method called `name` with `params` laid over its defaults.
+    ///
+    /// # Errors
+    /// An unknown name, an unknown or ill-typed or out-of-range parameter
+    /// (the message names it), or a model that cannot be loaded — all before
+    /// any mesh is read.
+    pub fn new(name: &str, params: &Params) -> Result<Denoiser, DenoiseError> {
+        let info = find(name)?;
+        let method = (info.build)(info.name, params)?;
+        Ok(Denoiser { info, method })
+    }
+
+    /// The method called `name` with its default parameters.
+    pub fn with_defaults(name: &str) -> Result<Denoiser, DenoiseError> {
+        Denoiser::new(name, &Params::new())
+    }
+
+    /// The method's registered name.
+    pub fn name(&self) -> &'static str {
+        self.info.name
+    }
+
+    /// The method's registry entry.
+    pub fn info(&self) -> &'static MethodInfo {
+        self.info
+    }
+
+    /// The resolved parameters (every field, defaults included).
+    pub fn parameters(&self) -> Value {
+        self.method.parameters()
+    }
+
+    /// Denoises `mesh`. `gt` (the clean mesh, face by face) is read only by
+    /// the oracle. The result keeps the input's vertex and face order;
+    /// outlier vertices stay in place.
+    pub fn denoise(
+        &self,
+        mesh: &Mesh,
+        gt: Option<&Mesh>,
+        progress: &dyn Progress,
+    ) -> Result<Mesh, DenoiseError> {
+        self.run(mesh, gt, progress).map(|o| o.mesh)
+    }
+
+    /// [`Denoiser::denoise`] that also returns what the method reports
+    /// (NormalNet: seconds per stage).
+    pub fn run(
+        &self,
+        mesh: &Mesh,
+        gt: Option<&Mesh>,
+        progress: &dyn Progress,
+    ) -> Result<Outcome, DenoiseError> {
+        if self.info.needs_gt() && gt.is_none() {
+            return Err(DenoiseError::NeedsGroundTruth {
+                method: self.info.name,
+            });
+        }
+        self.method.run(mesh, gt, progress)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use normalnet_mesh::NoProgress;
+
+    fn plane() -> Mesh {
+        let n = 6;
+        let mut p = Vec::new();
+        for i in 0..=n {
+            for j in 0..=n {
+                p.push([i as f64, j as f64, 0.01 * ((i * 7 + j * 3) % 5) as f64]);
+            }
+        }
+        let id = |i: usize, j: usize| (i * (n + 1) + j) as u32;
+        let mut f = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Mesh::new(p, f).unwrap()
+    }
+
+    #[test]
+    fn every_registered_method_builds_with_its_defaults_and_names_round_trip() {
+        for info in METHODS {
+            let d = Denoiser::with_defaults(info.name).unwrap();
+            assert_eq!(d.name(), info.name);
+            assert!(d.parameters().is_object(), "{}", info.name);
+            // every flag maps onto a real parameter
+            let defaults = (info.defaults)();
+            for (flag, field) in info.flags {
+                assert!(
+                    defaults.get(field).is_some(),
+                    "{}: --{flag} -> {field}",
+                    info.name
+                );
+            }
+            for alias in info.aliases {
+                assert_eq!(find(alias).unwrap().name, info.name);
+            }
+        }
+        assert_eq!(find("GNF").unwrap().name, "gnf");
+        assert_eq!(find("gt-gnf").unwrap().name, "oracle");
+        let e = Denoiser::with_defaults("median").unwrap_err().to_string();
+        assert!(
+            e.contains("median") && e.contains("gnf") && e.contains("normalnet"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn parameters_are_checked_before_any_mesh() {
+        let mut p = Params::new();
+        p.insert("mu_g".into(), (-1.0).into());
+        let e = Denoiser::new("gnf", &p).unwrap_err().to_string();
+        assert!(e.starts_with("gnf: ") && e.contains("mu_g"), "{e}");
+        let mut p = Params::new();
+        p.insert("vertex_iterations".into(), 0.into());
+        let e = Denoiser::new("normalnet", &p).unwrap_err().to_string();
+        assert!(e.contains("vertex_iterations = 0"), "{e}");
+        let mut p = Params::new();
+        p.insert("model".into(), "/no/such/bundle".into());
+        let e = Denoiser::new("normalnet", &p).unwrap_err().to_string();
+        assert!(e.contains("/no/such/bundle"), "{e}");
+    }
+
+    #[test]
+    fn the_oracle_needs_the_ground_truth_and_the_others_ignore_it() {
+        let mesh = plane();
+        let oracle = Denoiser::with_defaults("oracle").unwrap();
+        assert!(matches!(
+            oracle.denoise(&mesh, None, &NoProgress),
+            Err(DenoiseError::NeedsGroundTruth { .. })
+        ));
+        let out = oracle.denoise(&mesh, Some(&mesh), &NoProgress).unwrap();
+        assert_eq!(out.faces, mesh.faces);
+        let gnf = Denoiser::with_defaults("gnf").unwrap();
+        assert_eq!(
+            gnf.denoise(&mesh, Some(&mesh), &NoProgress)
+                .unwrap()
+                .positions,
+            gnf.denoise(&mesh, None, &NoProgress).unwrap().positions
+        );
+    }
+
+    #[test]
+    fn normalnet_reports_its_stages_and_bundle() {
+        let mut p = Params::new();
+        p.insert("iterations".into(), 1.into());
+        p.insert("vertex_iterations".into(), 2.into());
+        let d = Denoiser::new("normalnet", &p).unwrap();
+        let o = d.run(&plane(), None, &NoProgress).unwrap();
+        assert!(o.stages.is_some_and(|s| s.faces_processed == 72));
+        assert_eq!(d.parameters()["model"], "<built-in models/lite>");
+        assert_eq!(d.parameters()["iterations"], 1);
+    }
+}

@@ -1,0 +1,168 @@
+//! NormalNet (paper §3, SPEC §7) as a registered denoiser: the model bundle
+//! is loaded and its networks compiled once, when the denoiser is built.
+//! The bundle: parameter `model` (a folder), else `$NORMALNET_MODEL`, else
+//! the shipped `models/lite` built into the library.
+
+use std::path::PathBuf;
+
+use normalnet_filters::FOLD_GUARD_COS;
+use normalnet_mesh::outliers::denoise_around;
+use normalnet_mesh::{Mesh, Progress};
+use normalnet_net::{Bundle, DenoiseParams};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::DenoiseError;
+use crate::params::{Params, defaults_of, resolve};
+use crate::registry::{Kind, Method, MethodInfo, Outcome};
+
+/// Environment variable naming a bundle folder (the `model` parameter wins).
+pub const MODEL_ENV: &str = "NORMALNET_MODEL";
+
+/// The registry entry.
+pub const INFO: MethodInfo = MethodInfo {
+    name: "normalnet",
+    aliases: &[],
+    summary: "NormalNet: voxelized neighbourhoods, a 3D CNN predicts the filtered normals (Zhao et al. 2019)",
+    kind: Kind::Learned,
+    flags: &[
+        ("iterations", "iterations"),
+        ("vertex-iterations", "vertex_iterations"),
+        ("mu-g", "mu_g"),
+        ("model", "model"),
+        ("guided-from", "guided_from"),
+        ("no-fold-guard", "fold_guard"),
+    ],
+    defaults: defaults_of::<NormalnetParams>,
+    build,
+};
+
+/// NormalNet's parameters; `Default` is SPEC §7.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NormalnetParams {
+    /// model bundle folder; none: `$NORMALNET_MODEL`, else the built-in one
+    pub model: Option<PathBuf>,
+    /// N_f, filtering iterations (10)
+    pub iterations: usize,
+    /// N_v, vertex-update passes per iteration (20)
+    pub vertex_iterations: usize,
+    /// μ_g; the nearest of the bundle's six outputs is used (0.35)
+    pub mu_g: f64,
+    /// from this iteration on, the network's normals guide a joint-bilateral
+    /// pass instead of being the filtered normals (0 = never: the paper's form)
+    pub guided_from: usize,
+    /// the fold guard of the vertex update (on)
+    pub fold_guard: bool,
+    /// the guard's cone: cos of the largest turn of a face away from its
+    /// filtered normal (0.5 = 60°; 0 refuses only flips)
+    pub fold_guard_cos: f64,
+}
+
+impl Default for NormalnetParams {
+    fn default() -> Self {
+        let d = DenoiseParams::default();
+        NormalnetParams {
+            model: None,
+            iterations: d.iterations,
+            vertex_iterations: d.vertex_iterations,
+            mu_g: d.mu_g,
+            guided_from: d.guided_from,
+            fold_guard: d.fold_guard.is_some(),
+            fold_guard_cos: d.fold_guard.unwrap_or(FOLD_GUARD_COS),
+        }
+    }
+}
+
+impl NormalnetParams {
+    /// The pipeline's settings.
+    pub fn pipeline(&self) -> DenoiseParams {
+        DenoiseParams {
+            iterations: self.iterations,
+            vertex_iterations: self.vertex_iterations,
+            mu_g: self.mu_g,
+            guided_from: self.guided_from,
+            fold_guard: self.fold_guard.then_some(self.fold_guard_cos),
+            ..DenoiseParams::default()
+        }
+    }
+
+    /// Checks the ranges (before any bundle is loaded).
+    pub fn check(&self) -> Result<(), DenoiseError> {
+        let bad = |message: String| DenoiseError::Parameter {
+            method: INFO.name,
+            message,
+        };
+        if self.vertex_iterations == 0 {
+            return Err(bad(
+                "vertex_iterations = 0 would run the whole network and return the input unchanged \
+                 (NormalNet moves vertices only in its vertex-update passes); give at least 1 \
+                 (default 20)"
+                    .into(),
+            ));
+        }
+        if !(-1.0..=1.0).contains(&self.fold_guard_cos) {
+            return Err(bad(format!(
+                "fold_guard_cos = {} must lie in [-1, 1]",
+                self.fold_guard_cos
+            )));
+        }
+        self.pipeline().validate().map_err(|e| bad(e.to_string()))
+    }
+
+    /// The bundle folder to load; `None`: the built-in bundle.
+    pub fn model_path(&self) -> Option<PathBuf> {
+        if let Some(p) = &self.model {
+            return Some(p.clone());
+        }
+        match std::env::var_os(MODEL_ENV) {
+            Some(p) if !p.is_empty() => Some(PathBuf::from(p)),
+            _ => None,
+        }
+    }
+
+    /// Loads the bundle these parameters name.
+    pub fn load_bundle(&self) -> Result<Bundle, DenoiseError> {
+        Ok(match self.model_path() {
+            Some(path) => Bundle::load(path)?,
+            None => normalnet_net::embedded::lite()?,
+        })
+    }
+}
+
+struct NormalNet {
+    params: NormalnetParams,
+    bundle: Bundle,
+}
+
+fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseError> {
+    let params: NormalnetParams = resolve(name, given)?;
+    params.check()?;
+    let bundle = params.load_bundle()?;
+    Ok(Box::new(NormalNet { params, bundle }))
+}
+
+impl Method for NormalNet {
+    fn parameters(&self) -> Value {
+        let mut v = serde_json::to_value(&self.params).unwrap_or(Value::Null);
+        // say which bundle ran, the built-in one included
+        v["model"] = Value::String(self.bundle.path.display().to_string());
+        v
+    }
+
+    fn run(
+        &self,
+        mesh: &Mesh,
+        _gt: Option<&Mesh>,
+        progress: &dyn Progress,
+    ) -> Result<Outcome, DenoiseError> {
+        let params = self.params.pipeline();
+        let mut stages = None;
+        let mesh = denoise_around(mesh, |m| {
+            let (out, times) = normalnet_net::denoise(m, &self.bundle, &params, progress)?;
+            stages = Some(times);
+            Ok::<_, DenoiseError>(out)
+        })?;
+        Ok(Outcome { mesh, stages })
+    }
+}

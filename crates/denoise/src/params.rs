@@ -1,0 +1,124 @@
+//! The one parameter mechanism: a method's parameters are a serde struct
+//! whose `Default` is its reference defaults; callers give a JSON object of
+//! the fields they want to change (CLI flags, `--param key=value`, bench
+//! settings, Python keyword arguments all become one), which is laid over
+//! the defaults key by key. Unknown keys and wrong types are errors naming
+//! the parameter and listing the known ones.
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use serde_json::{Map, Value};
+
+use crate::DenoiseError;
+
+/// Parameters given by a caller: field name → value.
+pub type Params = Map<String, Value>;
+
+/// The defaults of `P` as a JSON object.
+pub fn defaults_of<P: Default + Serialize>() -> Value {
+    serde_json::to_value(P::default()).unwrap_or(Value::Null)
+}
+
+/// `given` laid over the defaults of `P`.
+///
+/// # Errors
+/// [`DenoiseError::Parameter`] for an unknown key or a value of the wrong type.
+pub fn resolve<P: Default + Serialize + DeserializeOwned>(
+    method: &'static str,
+    given: &Params,
+) -> Result<P, DenoiseError> {
+    let bad = |message: String| DenoiseError::Parameter { method, message };
+    let mut value = defaults_of::<P>();
+    let fields = value
+        .as_object_mut()
+        .ok_or_else(|| bad("parameters are not a struct".into()))?;
+    for (key, v) in given {
+        if !fields.contains_key(key) {
+            let known: Vec<&str> = fields.keys().map(String::as_str).collect();
+            return Err(bad(format!(
+                "unknown parameter `{key}` (known: {})",
+                known.join(", ")
+            )));
+        }
+        fields.insert(key.clone(), v.clone());
+    }
+    serde_json::from_value(value).map_err(|e| {
+        // serde names the type ("invalid type: string, expected f64"); add
+        // which of the given keys it could be
+        let keys: Vec<&str> = given.keys().map(String::as_str).collect();
+        bad(format!(
+            "bad parameter value ({e}; given: {})",
+            keys.join(", ")
+        ))
+    })
+}
+
+/// `KEY=VALUE` → (key, value): the value as JSON when it parses as JSON
+/// (numbers, `true`, `null`, arrays), else as a string.
+pub fn parse_assignment(text: &str) -> Result<(String, Value), String> {
+    let (key, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: expected KEY=VALUE"))?;
+    let key = key.trim();
+    if key.is_empty() {
+        return Err(format!("`{text}`: empty key"));
+    }
+    let value = value.trim();
+    let v = serde_json::from_str(value).unwrap_or_else(|_| Value::String(value.to_string()));
+    Ok((key.to_string(), v))
+}
+
+/// `key=value key=value` of the parameters, for tables and logs.
+pub fn describe(params: &Value) -> String {
+    match params.as_object() {
+        Some(o) => o
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" "),
+        None => params.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use normalnet_filters::GnfParams;
+
+    #[test]
+    fn given_keys_override_the_defaults_and_typos_are_named() {
+        let mut given = Params::new();
+        given.insert("mu_g".into(), 0.25.into());
+        let p: GnfParams = resolve("gnf", &given).unwrap();
+        assert_eq!(p.mu_g, 0.25);
+        assert_eq!(p.normal_iterations, GnfParams::default().normal_iterations);
+        given.insert("mu".into(), 0.25.into());
+        let e = resolve::<GnfParams>("gnf", &given).unwrap_err().to_string();
+        assert!(e.contains("`mu`") && e.contains("mu_g"), "{e}");
+        let mut wrong = Params::new();
+        wrong.insert("mu_g".into(), "wide".into());
+        let e = resolve::<GnfParams>("gnf", &wrong).unwrap_err().to_string();
+        assert!(
+            e.starts_with("gnf: bad parameter value") && e.contains("mu_g"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn assignments_parse_json_or_strings() {
+        assert_eq!(
+            parse_assignment("mu_g=0.3").unwrap(),
+            ("mu_g".into(), 0.3.into())
+        );
+        assert_eq!(
+            parse_assignment("model=models/x").unwrap(),
+            ("model".into(), "models/x".into())
+        );
+        assert_eq!(
+            parse_assignment("fold_guard=false").unwrap(),
+            ("fold_guard".into(), false.into())
+        );
+        assert!(parse_assignment("nothing").is_err());
+        assert!(parse_assignment("=1").is_err());
+    }
+}
