@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Denoise a mesh (NormalNet by default, or a classical method).
     Denoise(Box<commands::denoise::Args>),
+    /// Denoise every mesh of a folder or pattern (resumable, with a summary).
+    Batch(Box<commands::batch::Args>),
     /// Add synthetic noise to a clean mesh (SPEC §2).
     Noise(commands::noise::Args),
     /// Error metrics of a result against ground truth (E_a, E_v, ...).
@@ -70,6 +72,9 @@ fn main() {
             output::check_dir(&a.out).and_then(|()| commands::bench::run(a, quiet))
         }
         Command::Denoise(a) => commands::denoise::run(*a, quiet),
+        Command::Batch(a) => {
+            output::check_dir(&a.out).and_then(|()| commands::batch::run(*a, quiet))
+        }
         Command::Noise(a) => commands::noise::run(a, quiet),
         Command::Metrics(a) => commands::metrics::run(a, quiet),
         Command::Info(a) => commands::info::run(a, quiet),

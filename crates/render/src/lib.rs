@@ -18,7 +18,7 @@ pub mod image;
 pub mod raster;
 pub mod report;
 
-pub use annotate::{append_colour_bar, draw_lines, render_annotated};
+pub use annotate::{append_colour_bar, draw_lines, render_against_gt, render_annotated};
 pub use colormap::{
     ColourBar, draw_colour_bar, error_colors, error_colour, nice_error_scale, turbo,
 };

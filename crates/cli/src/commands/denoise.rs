@@ -65,13 +65,9 @@ fn method_help() -> String {
     format!("Denoising method:\n{}", lines.join("\n"))
 }
 
-/// Arguments of `normalnet denoise`.
-#[derive(clap::Args)]
-pub struct Args {
-    /// Noisy input mesh (.obj, .off, .ply, .stl).
-    pub input: PathBuf,
-    /// Output mesh (format from the extension; written atomically).
-    pub output: PathBuf,
+/// The method and its parameters: shared by `denoise` and `batch`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct MethodArgs {
     /// Denoising method.
     #[arg(long, short, default_value = "normalnet", long_help = method_help(),
           value_parser = clap::builder::PossibleValuesParser::new(method_names()))]
@@ -153,6 +149,24 @@ pub struct Args {
     /// repeatable. The value is read as JSON when it parses, else as text.
     #[arg(long = "param", short = 'p', value_name = "KEY=VALUE", value_parser = parse_assignment)]
     pub params: Vec<(String, Value)>,
+    /// Switch off the fold guard of the vertex update (normalnet, gnf, bnf,
+    /// sun07, bi, vt; on by default: a vertex move may not fold a face over
+    /// against its filtered normal). Off reproduces the reference
+    /// implementations and the paper's NormalNet pipeline.
+    #[arg(long)]
+    pub no_fold_guard: bool,
+}
+
+/// Arguments of `normalnet denoise`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Noisy input mesh (.obj, .off, .ply, .stl).
+    pub input: PathBuf,
+    /// Output mesh (format from the extension; written atomically).
+    pub output: PathBuf,
+    /// The method and its parameters.
+    #[command(flatten)]
+    pub choice: MethodArgs,
     /// Ground-truth mesh: print error metrics of the result (required by gt-gnf).
     #[arg(long)]
     pub gt: Option<PathBuf>,
@@ -167,18 +181,12 @@ pub struct Args {
     /// and their faces in place and denoises the rest around them.
     #[arg(long)]
     pub remove_outliers: bool,
-    /// Switch off the fold guard of the vertex update (normalnet, gnf, bnf,
-    /// sun07, bi, vt; on by default: a vertex move may not fold a face over
-    /// against its filtered normal). Off reproduces the reference
-    /// implementations and the paper's NormalNet pipeline.
-    #[arg(long)]
-    pub no_fold_guard: bool,
 }
 
 /// The parameters the flags give for `info` (shorthand flags mapped onto
 /// their fields, then `--param`); a flag the method does not take is an
 /// error.
-fn given_params(args: &Args, info: &MethodInfo) -> anyhow::Result<Params> {
+pub fn given_params(args: &MethodArgs, info: &MethodInfo) -> anyhow::Result<Params> {
     let num = |v: Option<f64>| v.map(Value::from);
     let int = |v: Option<usize>| v.map(Value::from);
     let given: [(&str, Option<Value>); 19] = [
@@ -262,16 +270,16 @@ fn remove_outliers(mesh: Mesh) -> (Mesh, Option<Removed>) {
 /// Runs `normalnet denoise`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let t_total = Instant::now();
-    let info = normalnet_denoise::find(&args.method)?;
+    let info = normalnet_denoise::find(&args.choice.method)?;
     if info.needs_gt() && args.gt.is_none() {
         bail!(
             "--method {} reads the ground truth: pass --gt GT",
-            args.method
+            args.choice.method
         );
     }
     output::check_file(&args.output, output::MESH, "output mesh")?;
     // parameters checked and the model loaded before the mesh is read
-    let denoiser = Denoiser::new(info.name, &given_params(&args, info)?)?;
+    let denoiser = Denoiser::new(info.name, &given_params(&args.choice, info)?)?;
     let mesh =
         read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
     let (mesh, removed) = if args.remove_outliers {

@@ -1,5 +1,6 @@
 //! One module per subcommand; each has `Args` (clap) and `run(args, quiet)`.
 
+pub mod batch;
 pub mod bench;
 pub mod dataset;
 pub mod denoise;

@@ -4,10 +4,7 @@
 //! the title).
 
 use anyhow::Context;
-use normalnet_mesh::metrics::per_face_angle_errors;
-use normalnet_render::{
-    ColourBar, Projection, RenderOptions, Shading, error_colors, nice_error_scale, render_annotated,
-};
+use normalnet_render::{Projection, RenderOptions, Shading, render_against_gt};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -105,31 +102,16 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let mut lines = vec![args.title.clone().unwrap_or(name)];
-    let mut bar = None;
-    if let Some(gt_path) = &args.gt {
-        let gt = crate::input::read_mesh(gt_path)?;
-        let errors = per_face_angle_errors(&gt, &mesh).with_context(|| {
-            format!(
-                "comparing {} with {}",
-                args.mesh.display(),
-                gt_path.display()
-            )
+    let gt = match &args.gt {
+        Some(path) => Some(crate::input::read_mesh(path)?),
+        None => None,
+    };
+    let title = args.title.clone().unwrap_or(name);
+    let image = render_against_gt(&mesh, gt.as_ref(), &options, &title, args.max_error)
+        .with_context(|| match &args.gt {
+            Some(g) => format!("comparing {} with {}", args.mesh.display(), g.display()),
+            None => format!("rendering {}", args.mesh.display()),
         })?;
-        let e_a = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
-        let max = args.max_error.unwrap_or_else(|| nice_error_scale(&errors));
-        if !(max > 0.0 && max.is_finite()) {
-            anyhow::bail!("--max-error must be a positive number of degrees, got {max}");
-        }
-        options.face_colors = Some(error_colors(&errors, max));
-        // the ground truth frames the camera, so pictures of different results line up
-        options.bounds = Some(gt.bounding_box());
-        if args.title.is_none() {
-            lines[0] = format!("{}   E_a = {e_a:.2} deg", lines[0]);
-        }
-        bar = Some(ColourBar::for_height(max, options.height, "error (deg)"));
-    }
-    let image = render_annotated(&mesh, &options, &lines, bar.as_ref())?;
     image
         .write_png(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;

@@ -1,0 +1,242 @@
+//! `normalnet batch INPUT... --out DIR`: denoises a collection with one
+//! method (built once: NormalNet's model loads once). INPUT is a folder
+//! (its mesh files, not recursive), a file, or a pattern with `*` / `?` in
+//! the file name (quoted, so the shell leaves it). Resumable: an output that
+//! exists is skipped (outputs appear whole or not at all, so an interrupted
+//! run leaves none half-written); `--overwrite` redoes them. A file that
+//! cannot be read or denoised is reported in the summary and the run goes
+//! on. Progress over files with ETA on stderr; `DIR/batch_summary.csv` and
+//! `.json` list every input (faces, seconds, status done / skipped /
+//! failed, error), rewritten after each file.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use normalnet_denoise::Denoiser;
+use normalnet_mesh::{NoProgress, Progress};
+use serde::Serialize;
+
+use super::denoise::{MethodArgs, given_params};
+use crate::output;
+use crate::progress::Bar;
+
+/// Arguments of `normalnet batch`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folders, files or file-name patterns (`scans/*.ply`).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Output folder (created): one mesh per input, same name.
+    #[arg(long, short)]
+    pub out: PathBuf,
+    /// Output format as a suffix (`.obj`, `.ply`, ...; default: the input's).
+    #[arg(long)]
+    pub suffix: Option<String>,
+    /// Redo inputs whose output exists.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// The method and its parameters.
+    #[command(flatten)]
+    pub choice: MethodArgs,
+}
+
+/// One line of the summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// the input file
+    pub input: PathBuf,
+    /// the output file
+    pub output: PathBuf,
+    /// `done`, `skipped` (output existed) or `failed`
+    pub status: &'static str,
+    /// faces of the input (when it was read)
+    pub faces: Option<usize>,
+    /// seconds spent on it
+    pub seconds: f64,
+    /// why it failed
+    pub error: Option<String>,
+}
+
+/// `*` and `?` in one file name.
+fn matches(pattern: &[u8], name: &[u8]) -> bool {
+    match (pattern.first(), name.first()) {
+        (None, None) => true,
+        (Some(b'*'), _) => {
+            matches(&pattern[1..], name) || (!name.is_empty() && matches(pattern, &name[1..]))
+        }
+        (Some(b'?'), Some(_)) => matches(&pattern[1..], &name[1..]),
+        (Some(p), Some(n)) if p == n => matches(&pattern[1..], &name[1..]),
+        _ => false,
+    }
+}
+
+fn is_mesh(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| output::MESH.contains(&e.to_ascii_lowercase().as_str()))
+}
+
+/// The input files, sorted within each argument, without repeats.
+pub fn collect_inputs(inputs: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for input in inputs {
+        let name = input.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let mut found: Vec<PathBuf> = if input.is_dir() {
+            std::fs::read_dir(input)
+                .with_context(|| format!("reading {}", input.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file() && is_mesh(p))
+                .collect()
+        } else if name.contains(['*', '?']) {
+            let dir = match input.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            std::fs::read_dir(&dir)
+                .with_context(|| format!("reading {}", dir.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.is_file()
+                        && p.file_name()
+                            .and_then(|n| n.to_str())
+                            .is_some_and(|n| matches(name.as_bytes(), n.as_bytes()))
+                })
+                .collect()
+        } else if input.is_file() {
+            vec![input.clone()]
+        } else {
+            bail!("{}: no such file or folder", input.display());
+        };
+        found.sort();
+        for f in found {
+            if !files.contains(&f) {
+                files.push(f);
+            }
+        }
+    }
+    if files.is_empty() {
+        bail!("no mesh files (.obj, .off, .ply, .stl) in {:?}", inputs);
+    }
+    Ok(files)
+}
+
+fn write_summary(out: &Path, rows: &[Row]) -> anyhow::Result<()> {
+    let mut csv = String::from("input,output,status,faces,seconds,error\n");
+    let quote = |s: &str| format!("\"{}\"", s.replace('"', "\"\""));
+    for r in rows {
+        csv.push_str(&format!(
+            "{},{},{},{},{:.3},{}\n",
+            quote(&r.input.display().to_string()),
+            quote(&r.output.display().to_string()),
+            r.status,
+            r.faces.map_or(String::new(), |f| f.to_string()),
+            r.seconds,
+            r.error.as_deref().map_or(String::new(), quote)
+        ));
+    }
+    for (name, bytes) in [
+        ("batch_summary.csv", csv.into_bytes()),
+        ("batch_summary.json", serde_json::to_vec_pretty(rows)?),
+    ] {
+        let path = out.join(name);
+        let tmp = out.join(format!(".{name}.tmp"));
+        std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
+        std::fs::rename(&tmp, &path).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Runs `normalnet batch`.
+pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
+    let info = normalnet_denoise::find(&args.choice.method)?;
+    if info.needs_gt() {
+        bail!(
+            "--method {} reads the ground truth; batch has none",
+            info.name
+        );
+    }
+    if let Some(s) = &args.suffix {
+        let ext = s.trim_start_matches('.');
+        if !output::MESH.contains(&ext) {
+            bail!("--suffix {s}: expected one of .obj, .off, .ply, .stl");
+        }
+    }
+    let files = collect_inputs(&args.inputs)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let denoiser = Denoiser::new(info.name, &given_params(&args.choice, info)?)?;
+    let bar = Bar::new(quiet);
+    bar.start(&format!("batch {}", info.name), files.len() as u64);
+    let mut rows = Vec::with_capacity(files.len());
+    let started = Instant::now();
+    for input in &files {
+        let stem = input.file_stem().unwrap_or_default().to_string_lossy();
+        let suffix = match &args.suffix {
+            Some(s) => s.trim_start_matches('.').to_string(),
+            None => input
+                .extension()
+                .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                .unwrap_or_else(|| "obj".into()),
+        };
+        let output = args.out.join(format!("{stem}.{suffix}"));
+        bar.message(&input.display().to_string());
+        let t = Instant::now();
+        let mut row = Row {
+            input: input.clone(),
+            output: output.clone(),
+            status: "done",
+            faces: None,
+            seconds: 0.0,
+            error: None,
+        };
+        if output.exists() && !args.overwrite {
+            row.status = "skipped";
+        } else {
+            let result = (|| -> anyhow::Result<()> {
+                let mesh = crate::input::read_mesh(input)?;
+                row.faces = Some(mesh.num_faces());
+                let out = denoiser.denoise(&mesh, None, &NoProgress)?;
+                normalnet_mesh::write_mesh(&output, &out)?;
+                Ok(())
+            })();
+            if let Err(e) = result {
+                row.status = "failed";
+                row.error = Some(format!("{e:#}"));
+                if !quiet {
+                    eprintln!("{}: failed: {e:#}", input.display());
+                }
+            }
+        }
+        row.seconds = t.elapsed().as_secs_f64();
+        rows.push(row);
+        write_summary(&args.out, &rows)?;
+        bar.advance(1);
+    }
+    bar.finish();
+    let count = |s: &str| rows.iter().filter(|r| r.status == s).count();
+    println!(
+        "{} files: {} done, {} skipped, {} failed in {:.1} s; summary in {}",
+        rows.len(),
+        count("done"),
+        count("skipped"),
+        count("failed"),
+        started.elapsed().as_secs_f64(),
+        args.out.join("batch_summary.csv").display()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn patterns_match_file_names() {
+        assert!(matches(b"*.ply", b"scan.ply"));
+        assert!(matches(b"s?an*.obj", b"scan01.obj"));
+        assert!(!matches(b"*.ply", b"scan.obj"));
+        assert!(matches(b"*", b""));
+        assert!(!matches(b"a?", b"a"));
+    }
+}

@@ -1,0 +1,259 @@
+"""normalnet: mesh denoising on the CPU — NormalNet and the classical filters.
+
+Five lines::
+
+    import normalnet
+    v, f = normalnet.read_mesh("examples/noisy-part.obj")
+    out = normalnet.denoise(v, f)                      # NormalNet, built-in model
+    out_gnf = normalnet.denoise(v, f, "gnf", mu_g=0.3)   # any registered method
+    normalnet.write_mesh("denoised.obj", out, f)
+
+Arrays: vertices ``(N, 3)`` float (converted to float64), faces ``(M, 3)``
+integer (converted to int64), 0-based. Keyword parameters are the fields the
+CLI prints under ``parameters`` in ``normalnet denoise --json`` (see
+:func:`methods` for each method's defaults). Errors are ``ValueError`` (bad
+arrays, names, parameters), ``OSError`` (files) or ``RuntimeError``, with the
+Rust library's message. The work runs with the GIL released.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+import time
+import zlib
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _normalnet
+
+__all__ = [
+    "denoise",
+    "denoise_report",
+    "denoise_file",
+    "denoise_trimesh",
+    "methods",
+    "noise",
+    "metrics",
+    "read_mesh",
+    "write_mesh",
+    "render",
+    "render_png",
+    "MESH_SUFFIXES",
+]
+
+__version__ = _normalnet.__version__
+
+#: file name suffixes read and written (format chosen by the suffix)
+MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
+
+Mesh = Tuple[np.ndarray, np.ndarray]
+
+
+def _vertices(vertices: Any, what: str) -> np.ndarray:
+    try:
+        v = np.ascontiguousarray(vertices, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{what}: not convertible to a float64 array ({e})") from None
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"{what}: expected shape (N, 3), got {v.shape}")
+    return v
+
+
+def _faces(faces: Any, what: str) -> np.ndarray:
+    f = np.asarray(faces)
+    if f.size and not np.issubdtype(f.dtype, np.integer):
+        raise ValueError(f"{what}: expected an integer array of vertex indices, got dtype {f.dtype}")
+    f = np.ascontiguousarray(f, dtype=np.int64)
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise ValueError(f"{what}: expected shape (M, 3) (triangles), got {f.shape}")
+    return f
+
+
+def _mesh(vertices: Any, faces: Any, what: str = "mesh") -> Mesh:
+    return _vertices(vertices, f"{what} vertices"), _faces(faces, f"{what} faces")
+
+
+def _gt(gt: Optional[Mesh]) -> Tuple[Optional[np.ndarray], Optional[np.ndarray]]:
+    if gt is None:
+        return None, None
+    if not (isinstance(gt, (tuple, list)) and len(gt) == 2):
+        raise ValueError("gt: expected a (vertices, faces) pair")
+    return _mesh(gt[0], gt[1], "gt")
+
+
+def _params_json(params: Dict[str, Any]) -> str:
+    def plain(x: Any) -> Any:
+        if isinstance(x, (np.generic,)):
+            return x.item()
+        if isinstance(x, os.PathLike):
+            return os.fspath(x)
+        return x
+
+    return json.dumps({k: plain(v) for k, v in params.items()})
+
+
+def denoise_report(
+    vertices: Any,
+    faces: Any,
+    method: str = "normalnet",
+    gt: Optional[Mesh] = None,
+    **params: Any,
+) -> Tuple[np.ndarray, Dict[str, Any], Optional[Dict[str, Any]]]:
+    """Like :func:`denoise`, also returning the resolved parameters (every
+    field, defaults included) and NormalNet's seconds per stage (else None)."""
+    v, f = _mesh(vertices, faces)
+    gv, gf = _gt(gt)
+    out, parameters, stages = _normalnet.denoise(v, f, method, _params_json(params), gv, gf)
+    return out, json.loads(parameters), (json.loads(stages) if stages else None)
+
+
+def denoise(
+    vertices: Any,
+    faces: Any,
+    method: str = "normalnet",
+    gt: Optional[Mesh] = None,
+    **params: Any,
+) -> np.ndarray:
+    """Denoised vertices ``(N, 3)`` float64; the faces are unchanged.
+
+    ``method``: ``normalnet`` (default; ``model=`` a bundle folder, else
+    ``$NORMALNET_MODEL``, else the built-in model), ``gnf``, ``bnf``,
+    ``sun07``, ``l0``, ``bi``, ``vt``, or ``oracle`` (reads ``gt``, a
+    ``(vertices, faces)`` pair of the clean mesh). ``params`` override the
+    method's defaults by name, e.g. ``iterations=5`` for NormalNet or
+    ``normal_iterations=5`` for GNF.
+    """
+    return denoise_report(vertices, faces, method, gt, **params)[0]
+
+
+def methods() -> List[Dict[str, Any]]:
+    """Every registered method: name, aliases, summary, kind
+    (classical / learned / oracle) and default parameters."""
+    return json.loads(_normalnet.methods())
+
+
+def noise(
+    vertices: Any,
+    faces: Any,
+    level: float = 0.3,
+    seed: int = 0,
+    impulsive: Optional[float] = None,
+    direction: str = "normal",
+) -> np.ndarray:
+    """Noisy vertices: Gaussian noise of σ = level × mean edge length along
+    the vertex normals (``direction="random"``: random directions); with
+    ``impulsive=p`` only a fraction p of the vertices move. Same seed, same
+    result."""
+    v, f = _mesh(vertices, faces)
+    return _normalnet.noise(v, f, float(level), int(seed), impulsive, direction)
+
+
+def metrics(gt: Mesh, result: Union[Mesh, Any]) -> Dict[str, Any]:
+    """Error metrics of ``result`` against ``gt`` (each a ``(vertices,
+    faces)`` pair; ``result`` may be vertices alone, with gt's faces): the
+    keys of ``normalnet metrics --json`` (``e_a_deg``, ``e_v``,
+    ``e_v_over_le``, ``hausdorff``, ``flipped_faces``, ...)."""
+    gv, gf = _gt(gt)
+    if isinstance(result, (tuple, list)) and len(result) == 2:
+        rv, rf = _mesh(result[0], result[1], "result")
+    else:
+        rv, rf = _vertices(result, "result vertices"), gf
+    return json.loads(_normalnet.metrics(gv, gf, rv, rf))
+
+
+def read_mesh(path: Union[str, os.PathLike]) -> Mesh:
+    """``(vertices, faces)`` of an OBJ / OFF / PLY / STL file."""
+    return _normalnet.read_mesh(os.fspath(path))
+
+
+def write_mesh(path: Union[str, os.PathLike], vertices: Any, faces: Any) -> None:
+    """Writes a mesh; the format comes from the suffix; the file appears
+    whole or not at all (temporary file + rename)."""
+    v, f = _mesh(vertices, faces)
+    _normalnet.write_mesh(os.fspath(path), v, f)
+
+
+def render(
+    vertices: Any,
+    faces: Any,
+    gt: Optional[Mesh] = None,
+    size: Tuple[int, int] = (800, 600),
+    view: Tuple[float, float] = (30.0, 20.0),
+    title: str = "",
+    max_error: Optional[float] = None,
+) -> np.ndarray:
+    """An ``(height, width, 3)`` uint8 picture (software rasterizer, no GPU);
+    with ``gt``, faces coloured by angular error against it (colour bar, E_a
+    in the title). ``view`` = (azimuth, elevation) in degrees."""
+    v, f = _mesh(vertices, faces)
+    gv, gf = _gt(gt)
+    w, h = size
+    return _normalnet.render(v, f, gv, gf, int(w), int(h), float(view[0]), float(view[1]), title, max_error)
+
+
+def _png_bytes(image: np.ndarray) -> bytes:
+    h, w, _ = image.shape
+    raw = b"".join(b"\x00" + image[y].tobytes() for y in range(h))
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body) & 0xFFFFFFFF)
+
+    header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b"")
+
+
+def render_png(path: Union[str, os.PathLike], vertices: Any, faces: Any, **kwargs: Any) -> None:
+    """:func:`render` written to a PNG file."""
+    image = render(vertices, faces, **kwargs)
+    path = os.fspath(path)
+    tmp = f"{path}.tmp-{os.getpid()}"
+    with open(tmp, "wb") as fh:
+        fh.write(_png_bytes(np.ascontiguousarray(image)))
+    os.replace(tmp, path)
+
+
+def denoise_file(
+    input: Union[str, os.PathLike],
+    output: Union[str, os.PathLike],
+    method: str = "normalnet",
+    skip_existing: bool = True,
+    **params: Any,
+) -> Dict[str, Any]:
+    """Denoises one file into ``output`` and returns a summary row
+    (``input``, ``output``, ``status`` = done / skipped / failed, ``faces``,
+    ``seconds``, ``error``) — the unit of work of :mod:`normalnet.distributed`
+    and of ``normalnet batch``. Never raises for a bad mesh: the error goes
+    into the row; never leaves a partial output."""
+    input, output = os.fspath(input), os.fspath(output)
+    row: Dict[str, Any] = {"input": input, "output": output, "method": method,
+                           "status": "done", "faces": None, "seconds": 0.0, "error": None}
+    if skip_existing and os.path.exists(output):
+        row["status"] = "skipped"
+        return row
+    start = time.perf_counter()
+    try:
+        v, f = read_mesh(input)
+        row["faces"] = int(f.shape[0])
+        out = denoise(v, f, method, **params)
+        write_mesh(output, out, f)
+    except (ValueError, OSError, RuntimeError) as e:
+        row["status"] = "failed"
+        row["error"] = str(e)
+    row["seconds"] = time.perf_counter() - start
+    return row
+
+
+def denoise_trimesh(mesh: Any, method: str = "normalnet", **params: Any) -> Any:
+    """A denoised copy of a ``trimesh.Trimesh`` (needs trimesh)."""
+    try:
+        import trimesh  # noqa: F401
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("denoise_trimesh needs trimesh: pip install trimesh") from e
+    out = denoise(mesh.vertices, mesh.faces, method, **params)
+    copy = mesh.copy()
+    copy.vertices = out
+    return copy

@@ -1,0 +1,268 @@
+//! The native part of the `normalnet` Python package (PyO3, abi3): a thin
+//! layer over the Rust crates. The Python wrapper (`normalnet/__init__.py`)
+//! checks and converts arrays (float64 `N×3` vertices, int64 `M×3` faces,
+//! C-contiguous) and turns keyword parameters into JSON, the one parameter
+//! mechanism of `normalnet_denoise`; this module does the work with the GIL
+//! released and turns Rust errors into Python exceptions with the Rust
+//! message (`ValueError` for bad input and parameters, `OSError` for files,
+//! `RuntimeError` otherwise).
+
+use normalnet_denoise::{DenoiseError, Denoiser, Kind, METHODS, Params};
+use normalnet_mesh::{Mesh, MeshError, NoProgress, NoiseDirection, NoiseParams};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2};
+use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+
+fn value_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+fn mesh_error(e: MeshError) -> PyErr {
+    match e {
+        MeshError::Io { .. } => PyOSError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
+fn denoise_error(e: DenoiseError) -> PyErr {
+    match e {
+        DenoiseError::UnknownMethod { .. }
+        | DenoiseError::Parameter { .. }
+        | DenoiseError::NeedsGroundTruth { .. } => PyValueError::new_err(e.to_string()),
+        DenoiseError::Mesh(m) => mesh_error(m),
+        _ => PyRuntimeError::new_err(e.to_string()),
+    }
+}
+
+/// A mesh from the wrapper's arrays (already `N×3` float64 / `M×3` int64).
+fn mesh_from(vertices: &PyReadonlyArray2<f64>, faces: &PyReadonlyArray2<i64>) -> PyResult<Mesh> {
+    let v = vertices.as_array();
+    let f = faces.as_array();
+    if v.ncols() != 3 || f.ncols() != 3 {
+        return Err(value_error(format!(
+            "vertices must be N×3 and faces M×3, got {:?} and {:?}",
+            v.shape(),
+            f.shape()
+        )));
+    }
+    let positions: Vec<[f64; 3]> = v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+    let n = positions.len() as i64;
+    let mut tris = Vec::with_capacity(f.nrows());
+    for (i, r) in f.rows().into_iter().enumerate() {
+        let mut t = [0u32; 3];
+        for k in 0..3 {
+            if r[k] < 0 || r[k] >= n {
+                return Err(value_error(format!(
+                    "faces[{i}] = [{}, {}, {}]: index {} is outside 0..{n}",
+                    r[0], r[1], r[2], r[k]
+                )));
+            }
+            t[k] = r[k] as u32;
+        }
+        tris.push(t);
+    }
+    Mesh::new(positions, tris).map_err(mesh_error)
+}
+
+fn vertices_array<'py>(py: Python<'py>, mesh: &Mesh) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = mesh.positions.iter().flatten().copied().collect();
+    Array2::from_shape_vec((mesh.num_vertices(), 3), flat)
+        .expect("N×3")
+        .into_pyarray(py)
+}
+
+fn faces_array<'py>(py: Python<'py>, mesh: &Mesh) -> Bound<'py, PyArray2<i64>> {
+    let flat: Vec<i64> = mesh.faces.iter().flatten().map(|&i| i as i64).collect();
+    Array2::from_shape_vec((mesh.num_faces(), 3), flat)
+        .expect("M×3")
+        .into_pyarray(py)
+}
+
+fn parse_params(json: &str) -> PyResult<Params> {
+    match serde_json::from_str::<serde_json::Value>(json).map_err(value_error)? {
+        serde_json::Value::Object(m) => Ok(m),
+        other => Err(value_error(format!("parameters must be a mapping, got {other}"))),
+    }
+}
+
+/// Denoises a mesh; returns (vertices, resolved parameters as JSON, stage
+/// times as JSON or None).
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, method, params_json, gt_vertices=None, gt_faces=None))]
+fn denoise<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    method: &str,
+    params_json: &str,
+    gt_vertices: Option<PyReadonlyArray2<'py, f64>>,
+    gt_faces: Option<PyReadonlyArray2<'py, i64>>,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, String, Option<String>)> {
+    let mesh = mesh_from(&vertices, &faces)?;
+    let gt = match (&gt_vertices, &gt_faces) {
+        (Some(v), Some(f)) => Some(mesh_from(v, f)?),
+        (None, None) => None,
+        _ => return Err(value_error("gt needs both vertices and faces")),
+    };
+    let params = parse_params(params_json)?;
+    let (out, parameters, stages) = py
+        .detach(|| -> Result<_, DenoiseError> {
+            let d = Denoiser::new(method, &params)?;
+            let o = d.run(&mesh, gt.as_ref(), &NoProgress)?;
+            let stages = o.stages.map(|s| serde_json::to_string(&s).unwrap_or_default());
+            Ok((o.mesh, d.parameters().to_string(), stages))
+        })
+        .map_err(denoise_error)?;
+    Ok((vertices_array(py, &out), parameters, stages))
+}
+
+/// The registered methods as JSON: name, aliases, summary, kind, defaults.
+#[pyfunction]
+fn methods() -> String {
+    let list: Vec<serde_json::Value> = METHODS
+        .iter()
+        .map(|m| {
+            serde_json::json!({
+                "name": m.name,
+                "aliases": m.aliases,
+                "summary": m.summary,
+                "kind": match m.kind {
+                    Kind::Classical => "classical",
+                    Kind::Learned => "learned",
+                    Kind::Oracle => "oracle",
+                },
+                "defaults": (m.defaults)(),
+            })
+        })
+        .collect();
+    serde_json::Value::Array(list).to_string()
+}
+
+/// Synthetic noise (SPEC §2): σ = level × mean edge length.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, level, seed, impulsive, direction))]
+fn noise<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    level: f64,
+    seed: u64,
+    impulsive: Option<f64>,
+    direction: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let mesh = mesh_from(&vertices, &faces)?;
+    let direction = match direction {
+        "normal" => NoiseDirection::Normal,
+        "random" => NoiseDirection::Random,
+        other => {
+            return Err(value_error(format!(
+                "direction {other:?}: expected \"normal\" or \"random\""
+            )));
+        }
+    };
+    let params = NoiseParams {
+        level,
+        impulsive_fraction: impulsive,
+        direction,
+        seed,
+    };
+    let out = py
+        .detach(|| normalnet_mesh::add_noise(&mesh, &params))
+        .map_err(mesh_error)?;
+    Ok(vertices_array(py, &out))
+}
+
+/// Error metrics of `result` against `gt` as JSON (the CLI's keys).
+#[pyfunction]
+fn metrics<'py>(
+    py: Python<'py>,
+    gt_vertices: PyReadonlyArray2<'py, f64>,
+    gt_faces: PyReadonlyArray2<'py, i64>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+) -> PyResult<String> {
+    let gt = mesh_from(&gt_vertices, &gt_faces)?;
+    let result = mesh_from(&vertices, &faces)?;
+    let m = py
+        .detach(|| normalnet_mesh::metrics::compare(&gt, &result))
+        .map_err(mesh_error)?;
+    serde_json::to_string(&m).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
+/// Reads OBJ / OFF / PLY / STL; returns (vertices, faces).
+#[pyfunction]
+fn read_mesh<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+    let mesh = py
+        .detach(|| normalnet_mesh::read_mesh(&path))
+        .map_err(mesh_error)?;
+    Ok((vertices_array(py, &mesh), faces_array(py, &mesh)))
+}
+
+/// Writes a mesh (format from the extension), atomically.
+#[pyfunction]
+fn write_mesh<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+) -> PyResult<()> {
+    let mesh = mesh_from(&vertices, &faces)?;
+    py.detach(|| normalnet_mesh::write_mesh(&path, &mesh))
+        .map_err(mesh_error)
+}
+
+/// Renders to an `H×W×3` uint8 image; with gt, faces coloured by error.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, gt_vertices, gt_faces, width, height, azimuth, elevation, title, max_error))]
+#[allow(clippy::too_many_arguments)]
+fn render<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    gt_vertices: Option<PyReadonlyArray2<'py, f64>>,
+    gt_faces: Option<PyReadonlyArray2<'py, i64>>,
+    width: u32,
+    height: u32,
+    azimuth: f64,
+    elevation: f64,
+    title: &str,
+    max_error: Option<f64>,
+) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let mesh = mesh_from(&vertices, &faces)?;
+    let gt = match (&gt_vertices, &gt_faces) {
+        (Some(v), Some(f)) => Some(mesh_from(v, f)?),
+        _ => None,
+    };
+    let options = normalnet_render::RenderOptions {
+        width,
+        height,
+        azimuth_deg: azimuth,
+        elevation_deg: elevation,
+        ..Default::default()
+    };
+    let image = py
+        .detach(|| normalnet_render::render_against_gt(&mesh, gt.as_ref(), &options, title, max_error))
+        .map_err(value_error)?;
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    let pixels = numpy::ndarray::Array3::from_shape_vec((h, w, 3), image.pixels().to_vec())
+        .expect("H×W×3");
+    Ok(pixels.into_pyarray(py))
+}
+
+/// The native module.
+#[pymodule]
+fn _normalnet(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(denoise, m)?)?;
+    m.add_function(wrap_pyfunction!(methods, m)?)?;
+    m.add_function(wrap_pyfunction!(noise, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
