@@ -16,6 +16,7 @@ CASES = [
     ("l0", ["--lambda", "0.1"], {"lambda_over_le2": 0.1}),
     ("bi", [], {}),
     ("vt", [], {}),
+    ("cnr", ["--vertex-iterations", "10"], {"vertex_iterations": 10}),
     ("oracle", ["--iterations", "3"], {"iterations": 3}),
 ]
 

@@ -22,6 +22,7 @@
 //! `normalnet_filters::ClassicalMethod`, or a [`registry::Method`] here)
 //! and one line in [`registry::METHODS`].
 
+pub mod cnr;
 pub mod error;
 pub mod normalnet;
 pub mod oracle;

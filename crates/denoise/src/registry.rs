@@ -11,7 +11,7 @@ use normalnet_net::StageTimes;
 use serde_json::Value;
 
 use crate::params::{Params, defaults_of, resolve};
-use crate::{DenoiseError, normalnet, oracle};
+use crate::{DenoiseError, cnr, normalnet, oracle};
 
 /// What kind of method an entry is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -177,6 +177,7 @@ pub static METHODS: &[MethodInfo] = &[
             FOLD_GUARD,
         ],
     ),
+    cnr::INFO,
     oracle::INFO,
 ];
 

@@ -313,6 +313,21 @@ fn load_source(config: &TrainConfig, spec: &SourceSpec) -> Result<Mesh, NetError
     }
 }
 
+/// The noisy copies of `specs` as `make_pairs` builds them for training
+/// (same names, noise levels and seeds): `(name, clean, noisy)`. Other
+/// learned methods (CNR) train on exactly NormalNet's data through it.
+pub fn noisy_pairs(
+    config: &TrainConfig,
+    specs: &[SourceSpec],
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<Vec<(String, Mesh, Mesh)>, NetError> {
+    Ok(make_pairs(config, specs, seed, progress)?
+        .into_iter()
+        .map(|p| (p.name, p.clean, p.state))
+        .collect())
+}
+
 fn make_pairs(
     config: &TrainConfig,
     specs: &[SourceSpec],

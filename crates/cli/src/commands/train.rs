@@ -1,5 +1,7 @@
 //! `normalnet train`: trains a NormalNet model bundle with the iterative
-//! scheme of the paper (§4, SPEC §8); see `normalnet_net::training`.
+//! scheme of the paper (§4, SPEC §8; `normalnet_net::training`), or, with
+//! `--method cnr`, a CNR model (SPEC §9.1; `normalnet_denoise::cnr::train`)
+//! on the same training sources and validation meshes.
 
 use anyhow::Context;
 use normalnet_net::training::{TrainConfig, train};
@@ -18,9 +20,81 @@ pub struct Args {
     /// Training configuration (TOML; see configs/train-lite.toml).
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Continue an interrupted run in --out.
+    /// Continue an interrupted run in --out (normalnet).
     #[arg(long)]
     pub resume: bool,
+    /// What to train: normalnet (a bundle) or cnr (OUT/cnr.json; the
+    /// config's sources, validation and seed).
+    #[arg(long, default_value = "normalnet", value_parser = ["normalnet", "cnr"])]
+    pub method: String,
+    /// CNR: hidden width of each regressor.
+    #[arg(long, default_value_t = 64)]
+    pub hidden: usize,
+    /// CNR: clusters per stage.
+    #[arg(long, default_value_t = 4)]
+    pub clusters: usize,
+    /// CNR: passes over each cluster's faces.
+    #[arg(long, default_value_t = 20)]
+    pub epochs: usize,
+    /// CNR: the descriptor's neighbourhood in vertex rings (SPEC: 1).
+    #[arg(long, default_value_t = 1)]
+    pub ring: usize,
+    /// CNR: cascade stages.
+    #[arg(long, default_value_t = 3)]
+    pub stages: usize,
+}
+
+/// `normalnet train --method cnr`.
+fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<()> {
+    use normalnet_denoise::cnr::train::{CnrTrainSettings, TrainMesh, train as train_cnr_model};
+    use normalnet_net::training::noisy_pairs;
+    let bar = crate::progress::Bar::new(quiet);
+    let meshes = |specs, seed| -> anyhow::Result<Vec<TrainMesh>> {
+        Ok(noisy_pairs(config, specs, seed, &bar)?
+            .into_iter()
+            .map(|(name, clean, noisy)| TrainMesh::new(name, &clean, noisy))
+            .collect())
+    };
+    let train_meshes = meshes(&config.sources, config.seed)?;
+    let validation = meshes(&config.validation, config.seed + 777)?;
+    let settings = CnrTrainSettings {
+        hidden: args.hidden,
+        clusters: args.clusters,
+        epochs: args.epochs,
+        ring: args.ring,
+        stages: args.stages,
+        seed: config.seed,
+        ..CnrTrainSettings::default()
+    };
+    if settings.hidden == 0
+        || settings.clusters == 0
+        || settings.epochs == 0
+        || settings.stages == 0
+    {
+        anyhow::bail!("--hidden, --clusters, --epochs and --stages must be positive");
+    }
+    if !(1..=3).contains(&settings.ring) {
+        anyhow::bail!("--ring must be 1, 2 or 3");
+    }
+    let start = std::time::Instant::now();
+    let mut model = train_cnr_model(train_meshes, validation, &settings, &bar);
+    model.training.push(format!(
+        "trained by `normalnet train --method cnr` with {} in {:.0} s",
+        args.config
+            .as_ref()
+            .map_or("<none>".into(), |p| p.display().to_string()),
+        start.elapsed().as_secs_f64()
+    ));
+    std::fs::create_dir_all(&args.out)?;
+    let path = args.out.join("cnr.json");
+    let tmp = args.out.join(".cnr.json.tmp");
+    std::fs::write(&tmp, serde_json::to_string(&model)?)?;
+    std::fs::rename(&tmp, &path)?;
+    println!("CNR model written to {}", path.display());
+    for line in &model.training {
+        println!("  {line}");
+    }
+    Ok(())
 }
 
 /// Runs `normalnet train`.
@@ -33,6 +107,9 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         config.preset = p.clone();
     }
     crate::output::check_dir(&args.out)?;
+    if args.method == "cnr" {
+        return train_cnr(&args, &config, quiet);
+    }
     let bar = crate::progress::Bar::new(quiet);
     let manifest = train(&config, &args.out, args.resume, &bar)
         .with_context(|| format!("training into {}", args.out.display()))?;

@@ -1,0 +1,72 @@
+//! The shipped learned models on a generated noisy CAD-like shape (not a
+//! test model): each must clearly improve the noisy input and keep the face
+//! order. Sanity bounds, not reference figures.
+
+use normalnet_denoise::{Denoiser, Params};
+use normalnet_mesh::metrics::compare;
+use normalnet_mesh::{NoProgress, NoiseParams, add_noise};
+
+fn shape() -> (normalnet_mesh::Mesh, normalnet_mesh::Mesh) {
+    let clean = normalnet_voxel::shapes::generate_seeded(77, 1500).unwrap();
+    let noisy = add_noise(
+        &clean,
+        &NoiseParams {
+            level: 0.3,
+            seed: 77,
+            ..NoiseParams::default()
+        },
+    )
+    .unwrap();
+    (clean, noisy)
+}
+
+#[test]
+fn cnr_and_normalnet_improve_a_noisy_shape() {
+    let (clean, noisy) = shape();
+    let before = compare(&clean, &noisy).unwrap().e_a_deg;
+    for (name, bound) in [("cnr", 0.5), ("normalnet", 0.5)] {
+        let mut p = Params::new();
+        if name == "normalnet" {
+            p.insert("iterations".into(), 3.into());
+        }
+        let out = Denoiser::new(name, &p)
+            .unwrap()
+            .denoise(&noisy, None, &NoProgress)
+            .unwrap();
+        assert_eq!(out.faces, noisy.faces);
+        let after = compare(&clean, &out).unwrap().e_a_deg;
+        eprintln!("{name}: E_a {before:.2} -> {after:.2}");
+        assert!(
+            after < bound * before,
+            "{name}: E_a {before:.2} -> {after:.2}"
+        );
+    }
+}
+
+#[test]
+fn cnr_stages_and_a_broken_model_file() {
+    let (_, noisy) = shape();
+    let one = {
+        let mut p = Params::new();
+        p.insert("stages".into(), 1.into());
+        Denoiser::new("cnr", &p)
+            .unwrap()
+            .denoise(&noisy, None, &NoProgress)
+            .unwrap()
+    };
+    let all = Denoiser::with_defaults("cnr")
+        .unwrap()
+        .denoise(&noisy, None, &NoProgress)
+        .unwrap();
+    assert_ne!(one.positions, all.positions);
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("cnr.json");
+    std::fs::write(&bad, "{\"format\": \"normalnet-cnr-1\", \"stages\": [{}]}").unwrap();
+    let mut p = Params::new();
+    p.insert("model".into(), bad.display().to_string().into());
+    let e = Denoiser::new("cnr", &p).unwrap_err().to_string();
+    assert!(
+        e.contains("cnr.json") && e.contains("not a CNR model"),
+        "{e}"
+    );
+}
