@@ -28,6 +28,8 @@ pub mod normalnet;
 pub mod oracle;
 pub mod params;
 pub mod registry;
+#[cfg(test)]
+mod test_meshes;
 
 pub use error::DenoiseError;
 pub use params::Params;
@@ -120,22 +122,7 @@ mod tests {
     use normalnet_mesh::NoProgress;
 
     fn plane() -> Mesh {
-        let n = 6;
-        let mut p = Vec::new();
-        for i in 0..=n {
-            for j in 0..=n {
-                p.push([i as f64, j as f64, 0.01 * ((i * 7 + j * 3) % 5) as f64]);
-            }
-        }
-        let id = |i: usize, j: usize| (i * (n + 1) + j) as u32;
-        let mut f = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        Mesh::new(p, f).unwrap()
+        crate::test_meshes::height_grid(6, |i, j| 0.01 * ((i * 7 + j * 3) % 5) as f64)
     }
 
     #[test]

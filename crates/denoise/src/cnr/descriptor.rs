@@ -122,27 +122,10 @@ mod tests {
     use normalnet_mesh::{Mesh, Topology};
 
     fn bumpy() -> Mesh {
-        let n = 8;
-        let mut p = Vec::new();
-        for i in 0..=n {
-            for j in 0..=n {
-                let (x, y) = (i as f64, j as f64);
-                p.push([
-                    x,
-                    y,
-                    0.3 * (x * 0.7).sin() * (y * 0.5).cos() + 0.05 * ((i * 7 + j * 3) % 5) as f64,
-                ]);
-            }
-        }
-        let id = |i: usize, j: usize| (i * (n + 1) + j) as u32;
-        let mut f = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        Mesh::new(p, f).unwrap()
+        crate::test_meshes::height_grid(8, |i, j| {
+            let (x, y) = (i as f64, j as f64);
+            0.3 * (x * 0.7).sin() * (y * 0.5).cos() + 0.05 * ((i * 7 + j * 3) % 5) as f64
+        })
     }
 
     fn fnds(mesh: &Mesh) -> Vec<([f64; FND_LEN], Mat3)> {
