@@ -19,7 +19,7 @@
 use crate::error::{FilterError, check_range};
 use crate::gnf::radius_neighbourhood;
 use crate::stats::mean_centre_distance;
-use crate::vertex_update::{VertexUpdateBuffers, vertex_update_in_place};
+use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 use rayon::prelude::*;
@@ -207,9 +207,38 @@ impl GtGuidedGnfParams {
     }
 }
 
+/// One GT-guided pass as a [`NormalFilter`] of the shared driver: the
+/// guidance is fixed (the ground truth), the neighbourhood and `d_s` come
+/// from the current geometry of each pass.
+struct GtGuided<'a> {
+    gt_normals: &'a [Vec3],
+    mu_g: f64,
+    sigma_s_over_ds: f64,
+}
+
+impl NormalFilter for GtGuided<'_> {
+    fn pass(
+        &mut self,
+        topology: &Topology,
+        geometry: &FaceGeometry,
+        _normals: &[Vec3],
+        out: &mut [Vec3],
+    ) {
+        let filtered = gt_guided_pass(
+            topology,
+            geometry,
+            self.gt_normals,
+            &[self.mu_g],
+            self.sigma_s_over_ds,
+        );
+        out.copy_from_slice(&filtered);
+    }
+}
+
 /// The oracle: denoises `mesh` with GT-guided GNF passes (guidance = the
 /// ground-truth normals `gt_normals`, one per face), each followed by
-/// `vertex_iterations` vertex updates.
+/// `vertex_iterations` vertex updates, on the shared driver
+/// ([`run_filter`], interleaved schedule, no fold guard: the reference).
 pub fn gt_guided_gnf(
     mesh: &Mesh,
     gt_normals: &[Vec3],
@@ -219,33 +248,19 @@ pub fn gt_guided_gnf(
     params.validate()?;
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
     check_inputs(mesh, &topology, gt_normals)?;
-    let mut current = mesh.clone();
-    let mut geometry = FaceGeometry::new(mesh);
-    let mut buffers = VertexUpdateBuffers::default();
-    progress.start("GT-guided GNF", params.iterations as u64);
-    for k in 0..params.iterations {
-        if k > 0 {
-            geometry.update(&current);
-        }
-        let filtered = gt_guided_pass(
-            &topology,
-            &geometry,
-            gt_normals,
-            &[params.mu_g],
-            params.sigma_s_over_ds,
-        );
-        vertex_update_in_place(
-            &mut current.positions,
-            &mesh.faces,
-            &topology,
-            &filtered,
-            params.vertex_iterations,
-            &mut buffers,
-        );
-        progress.advance(1);
-    }
-    progress.finish();
-    Ok(current)
+    let mut filter = GtGuided {
+        gt_normals,
+        mu_g: params.mu_g,
+        sigma_s_over_ds: params.sigma_s_over_ds,
+    };
+    let passes = Passes {
+        normal_iterations: params.iterations,
+        vertex_iterations: params.vertex_iterations,
+        schedule: Schedule::Interleaved,
+        fix_boundary: false,
+        fold_guard: None,
+    };
+    Ok(run_filter(&mut filter, mesh, &topology, passes, "GT-guided GNF", progress))
 }
 
 #[cfg(test)]
