@@ -52,6 +52,9 @@ pub struct NormalnetParams {
     /// from this iteration on, the network's normals guide a joint-bilateral
     /// pass instead of being the filtered normals (0 = never: the paper's form)
     pub guided_from: usize,
+    /// with the guided form: faces whose guided normal turns more than this
+    /// many degrees from the network's keep the network's (0 = no limit)
+    pub guided_max_turn_deg: f64,
     /// the fold guard of the vertex update (on)
     pub fold_guard: bool,
     /// the guard's cone: cos of the largest turn of a face away from its
@@ -68,6 +71,7 @@ impl Default for NormalnetParams {
             vertex_iterations: d.vertex_iterations,
             mu_g: d.mu_g,
             guided_from: d.guided_from,
+            guided_max_turn_deg: d.guided_max_turn_deg,
             fold_guard: d.fold_guard.is_some(),
             fold_guard_cos: d.fold_guard.unwrap_or(FOLD_GUARD_COS),
         }
@@ -82,6 +86,7 @@ impl NormalnetParams {
             vertex_iterations: self.vertex_iterations,
             mu_g: self.mu_g,
             guided_from: self.guided_from,
+            guided_max_turn_deg: self.guided_max_turn_deg,
             fold_guard: self.fold_guard.then_some(self.fold_guard_cos),
             ..DenoiseParams::default()
         }

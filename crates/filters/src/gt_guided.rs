@@ -16,10 +16,10 @@
 //! mesh (neighbourhood and `d_s` rebuilt from it, as the training targets
 //! are), then `N_v` vertex updates.
 
+use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use crate::error::{FilterError, check_range};
 use crate::gnf::radius_neighbourhood;
 use crate::stats::mean_centre_distance;
-use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 use rayon::prelude::*;
@@ -260,7 +260,14 @@ pub fn gt_guided_gnf(
         fix_boundary: false,
         fold_guard: None,
     };
-    Ok(run_filter(&mut filter, mesh, &topology, passes, "GT-guided GNF", progress))
+    Ok(run_filter(
+        &mut filter,
+        mesh,
+        &topology,
+        passes,
+        "GT-guided GNF",
+        progress,
+    ))
 }
 
 #[cfg(test)]

@@ -43,6 +43,11 @@ pub struct DenoiseParams {
     /// of being the filtered normals themselves. With perfect network
     /// outputs this is the oracle.
     pub guided_from: usize,
+    /// With the guided form: a face whose guided normal turns more than
+    /// this many degrees away from the network's keeps the network's (the
+    /// guided pass smooths what the network's guidance cannot separate:
+    /// fine detail); 0 = no limit.
+    pub guided_max_turn_deg: f64,
     /// the fold guard of the shared vertex update
     /// (`normalnet_filters::vertex_update`): `Some(cos)` keeps a face within
     /// `acos(cos)` of its filtered normal (default [`FOLD_GUARD_COS`], 60°;
@@ -58,6 +63,7 @@ impl Default for DenoiseParams {
             mu_g: 0.35,
             batch: 256,
             guided_from: 0,
+            guided_max_turn_deg: 0.0,
             fold_guard: Some(FOLD_GUARD_COS),
         }
     }
@@ -82,6 +88,14 @@ impl DenoiseParams {
             return Err(NetError::InvalidParameter {
                 name: "batch",
                 message: "must be at least 1".into(),
+            });
+        }
+        if !(self.guided_max_turn_deg.is_finite()
+            && (0.0..=180.0).contains(&self.guided_max_turn_deg))
+        {
+            return Err(NetError::InvalidParameter {
+                name: "guided_max_turn_deg",
+                message: format!("{} must lie in 0..=180 degrees", self.guided_max_turn_deg),
             });
         }
         Ok(())
@@ -151,13 +165,23 @@ pub fn denoise(
         times.add(&t);
         let t = Instant::now();
         let normals = if params.guided_from > 0 && k >= params.guided_from {
-            gt_guided_normals(
+            let guided = gt_guided_normals(
                 &current,
                 &topology,
                 &normals,
                 &[params.mu_g],
                 GT_GUIDED_SIGMA_S,
-            )
+            );
+            if params.guided_max_turn_deg > 0.0 {
+                let limit = params.guided_max_turn_deg.to_radians();
+                guided
+                    .iter()
+                    .zip(&normals)
+                    .map(|(g, n)| if vec3::angle(*g, *n) > limit { *n } else { *g })
+                    .collect()
+            } else {
+                guided
+            }
         } else {
             normals
         };
