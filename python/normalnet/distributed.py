@@ -28,9 +28,13 @@ from . import denoise_file
 FIELDS = ["input", "output", "method", "status", "faces", "seconds", "error"]
 
 
-def output_path(input: str, out_dir: str, suffix: Optional[str] = None) -> str:
-    """Where ``input`` goes: ``out_dir/<stem><suffix>`` (suffix: the input's)."""
+def output_path(input: str, out_dir: str, suffix: Optional[str] = None, folder: bool = False) -> str:
+    """Where ``input`` goes: ``out_dir/<stem><suffix>`` (suffix: the
+    input's), or ``out_dir/<folder>-<stem><suffix>`` with ``folder`` (what
+    :func:`denoise_files` uses when stems collide, like ``normalnet batch``)."""
     stem, ext = os.path.splitext(os.path.basename(input))
+    if folder:
+        stem = os.path.basename(os.path.dirname(os.path.abspath(input))) + "-" + stem
     return os.path.join(out_dir, stem + (suffix or ext))
 
 
@@ -76,10 +80,23 @@ def denoise_files(
         ray.init()
     os.makedirs(out_dir, exist_ok=True)
     paths = [os.fspath(p) for p in paths]
+    stems = [os.path.splitext(os.path.basename(p))[0] for p in paths]
+    outputs = [output_path(p, out_dir, suffix, stems.count(s) > 1) for p, s in zip(paths, stems)]
+    if len(set(outputs)) != len(outputs):
+        raise ValueError("two inputs would write the same output; rename one")
     if max_in_flight is None:
         max_in_flight = max(2, int(2 * ray.cluster_resources().get("CPU", 2) / cpus_per_task))
 
-    @ray.remote(num_cpus=cpus_per_task, max_retries=retries, retry_exceptions=True)
+    # one rayon thread per reserved CPU, so that tasks running side by side
+    # do not each start a pool the size of the machine
+    threads = str(max(1, int(cpus_per_task)))
+
+    @ray.remote(
+        num_cpus=cpus_per_task,
+        max_retries=retries,
+        retry_exceptions=True,
+        runtime_env={"env_vars": {"RAYON_NUM_THREADS": threads}},
+    )
     def task(inp: str, out: str) -> Dict[str, Any]:
         return denoise_file(inp, out, method, skip_existing, **params)
 
@@ -89,7 +106,7 @@ def denoise_files(
     while next_index < len(paths) or pending:
         while next_index < len(paths) and len(pending) < max_in_flight:
             inp = paths[next_index]
-            pending[task.remote(inp, output_path(inp, out_dir, suffix))] = next_index
+            pending[task.remote(inp, outputs[next_index])] = next_index
             next_index += 1
         done, _ = ray.wait(list(pending), num_returns=1)
         for ref in done:
@@ -97,7 +114,7 @@ def denoise_files(
             try:
                 rows[i] = ray.get(ref)
             except Exception as e:  # the task failed after its retries
-                rows[i] = {"input": paths[i], "output": output_path(paths[i], out_dir, suffix),
+                rows[i] = {"input": paths[i], "output": outputs[i],
                            "method": method, "status": "failed", "faces": None,
                            "seconds": 0.0, "error": f"task failed after {retries} retries: {e}"}
     result = [r for r in rows if r is not None]

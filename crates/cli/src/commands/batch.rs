@@ -121,6 +121,35 @@ pub fn collect_inputs(inputs: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
     Ok(files)
 }
 
+/// Output file names (without suffix): the input's stem, or
+/// `<folder>-<stem>` for inputs whose stems collide (`cnr/block_n1/Noisy.obj`
+/// and `cnr/cube_n1/Noisy.obj` become `block_n1-Noisy` and `cube_n1-Noisy`).
+pub fn output_stems(files: &[PathBuf]) -> Vec<String> {
+    let stem = |f: &PathBuf| {
+        f.file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned()
+    };
+    let stems: Vec<String> = files.iter().map(stem).collect();
+    files
+        .iter()
+        .zip(&stems)
+        .map(|(f, s)| {
+            if stems.iter().filter(|t| *t == s).count() > 1 {
+                let folder = f
+                    .parent()
+                    .and_then(|p| p.file_name())
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                format!("{folder}-{s}")
+            } else {
+                s.clone()
+            }
+        })
+        .collect()
+}
+
 fn write_summary(out: &Path, rows: &[Row]) -> anyhow::Result<()> {
     let mut csv = String::from("input,output,status,faces,seconds,error\n");
     let quote = |s: &str| format!("\"{}\"", s.replace('"', "\"\""));
@@ -170,8 +199,15 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     bar.start(&format!("batch {}", info.name), files.len() as u64);
     let mut rows = Vec::with_capacity(files.len());
     let started = Instant::now();
-    for input in &files {
-        let stem = input.file_stem().unwrap_or_default().to_string_lossy();
+    let stems = output_stems(&files);
+    if let Some(dup) = stems
+        .iter()
+        .enumerate()
+        .find(|(i, s)| stems[..*i].contains(s))
+    {
+        bail!("two inputs would both write {}: rename one", dup.1);
+    }
+    for (input, stem) in files.iter().zip(&stems) {
         let suffix = match &args.suffix {
             Some(s) => s.trim_start_matches('.').to_string(),
             None => input
@@ -238,5 +274,21 @@ mod tests {
         assert!(!matches(b"*.ply", b"scan.obj"));
         assert!(matches(b"*", b""));
         assert!(!matches(b"a?", b"a"));
+    }
+
+    #[test]
+    fn colliding_stems_take_their_folder_name() {
+        let files: Vec<PathBuf> = [
+            "d/block_n1/Noisy.obj",
+            "d/cube_n1/Noisy.obj",
+            "d/x/other.ply",
+        ]
+        .iter()
+        .map(PathBuf::from)
+        .collect();
+        assert_eq!(
+            output_stems(&files),
+            ["block_n1-Noisy", "cube_n1-Noisy", "other"]
+        );
     }
 }
