@@ -169,9 +169,8 @@ fn write_summary(out: &Path, rows: &[Row]) -> anyhow::Result<()> {
         ("batch_summary.json", serde_json::to_vec_pretty(rows)?),
     ] {
         let path = out.join(name);
-        let tmp = out.join(format!(".{name}.tmp"));
-        std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-        std::fs::rename(&tmp, &path).with_context(|| format!("writing {}", path.display()))?;
+        normalnet_mesh::io::write_atomically(&path, |w| w.write_all(&bytes))
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

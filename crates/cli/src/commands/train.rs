@@ -87,9 +87,9 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
     ));
     std::fs::create_dir_all(&args.out)?;
     let path = args.out.join("cnr.json");
-    let tmp = args.out.join(".cnr.json.tmp");
-    std::fs::write(&tmp, serde_json::to_string(&model)?)?;
-    std::fs::rename(&tmp, &path)?;
+    let text = serde_json::to_string(&model)?;
+    normalnet_mesh::io::write_atomically(&path, |w| w.write_all(text.as_bytes()))
+        .with_context(|| format!("writing {}", path.display()))?;
     println!("CNR model written to {}", path.display());
     for line in &model.training {
         println!("  {line}");
