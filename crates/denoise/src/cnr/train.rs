@@ -11,7 +11,7 @@
 use normalnet_filters::{FOLD_GUARD_COS, VertexUpdate, VertexUpdateBuffers, vertex_update_with};
 use normalnet_mesh::geometry::{face_normals, mean_edge_length};
 use normalnet_mesh::vec3::{self, Vec3};
-use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
+use normalnet_mesh::{Csr, FaceGeometry, Mesh, Progress, Topology};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -72,6 +72,8 @@ pub struct TrainMesh {
     pub gt: Vec<Vec3>,
     /// the current (noisy, then partly denoised) mesh
     pub state: Mesh,
+    /// its connectivity (the faces never change)
+    pub topology: Topology,
 }
 
 impl TrainMesh {
@@ -80,21 +82,20 @@ impl TrainMesh {
         TrainMesh {
             name,
             gt: face_normals(clean),
+            topology: Topology::new(noisy.num_vertices(), &noisy.faces),
             state: noisy,
         }
     }
 }
 
 /// Descriptors and rotated targets of every face of `meshes`.
-fn samples(meshes: &[TrainMesh], ring: usize) -> (Vec<[f64; FND_LEN]>, Vec<[f64; 3]>) {
+fn samples(meshes: &[TrainMesh], rings: &[Csr]) -> (Vec<[f64; FND_LEN]>, Vec<[f64; 3]>) {
     let mut xs = Vec::new();
     let mut ys = Vec::new();
-    for m in meshes {
-        let topology = Topology::new(m.state.num_vertices(), &m.state.faces);
-        let rings = topology.face_rings(ring);
+    for (m, rings) in meshes.iter().zip(rings) {
         let geometry = FaceGeometry::new(&m.state);
-        let l_e = mean_edge_length(&m.state, &topology);
-        for ((d, r), gt) in descriptors(&geometry, &rings, l_e).into_iter().zip(&m.gt) {
+        let l_e = mean_edge_length(&m.state, &m.topology);
+        for ((d, r), gt) in descriptors(&geometry, rings, l_e).into_iter().zip(&m.gt) {
             if *gt == [0.0; 3] {
                 continue;
             }
@@ -295,11 +296,9 @@ fn train_mlp(
 }
 
 /// One stage taken by every mesh: regressed normals, then the vertex update.
-fn advance(meshes: &mut [TrainMesh], stage: &Stage, vertex_iterations: usize, ring: usize) {
-    for m in meshes.iter_mut() {
-        let topology = Topology::new(m.state.num_vertices(), &m.state.faces);
-        let rings = topology.face_rings(ring);
-        let normals = stage_normals(stage, &m.state, &topology, &rings);
+fn advance(meshes: &mut [TrainMesh], rings: &[Csr], stage: &Stage, vertex_iterations: usize) {
+    for (m, rings) in meshes.iter_mut().zip(rings) {
+        let normals = stage_normals(stage, &m.state, &m.topology, rings);
         let mut positions = m.state.positions.clone();
         let update = VertexUpdate {
             iterations: vertex_iterations,
@@ -309,7 +308,7 @@ fn advance(meshes: &mut [TrainMesh], stage: &Stage, vertex_iterations: usize, ri
         vertex_update_with(
             &mut positions,
             &m.state.faces,
-            &topology,
+            &m.topology,
             &normals,
             &update,
             &mut VertexUpdateBuffers::default(),
@@ -320,15 +319,13 @@ fn advance(meshes: &mut [TrainMesh], stage: &Stage, vertex_iterations: usize, ri
 
 /// Mean angle of the current normals and of one stage's regressed normals
 /// against the ground truth, over `meshes`.
-fn validation(meshes: &[TrainMesh], stage: &Stage, ring: usize) -> (f64, f64) {
+fn validation(meshes: &[TrainMesh], rings: &[Csr], stage: &Stage) -> (f64, f64) {
     let (mut before, mut after, mut n) = (0.0, 0.0, 0usize);
-    for m in meshes {
-        let topology = Topology::new(m.state.num_vertices(), &m.state.faces);
-        let rings = topology.face_rings(ring);
+    for (m, rings) in meshes.iter().zip(rings) {
         let faces = m.state.num_faces();
         before += mean_angle(&face_normals(&m.state), &m.gt) * faces as f64;
         after +=
-            mean_angle(&stage_normals(stage, &m.state, &topology, &rings), &m.gt) * faces as f64;
+            mean_angle(&stage_normals(stage, &m.state, &m.topology, rings), &m.gt) * faces as f64;
         n += faces;
     }
     (before / n.max(1) as f64, after / n.max(1) as f64)
@@ -365,9 +362,17 @@ pub fn train(
     ));
     progress.start("CNR training", s.stages as u64);
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    // the descriptors' patches, once: the faces never change
+    let rings_of = |meshes: &[TrainMesh]| -> Vec<Csr> {
+        meshes
+            .iter()
+            .map(|m| m.topology.face_rings(s.ring))
+            .collect()
+    };
+    let (train_rings, validation_rings) = (rings_of(&train), rings_of(&validation_meshes));
     for t in 0..s.stages {
         progress.message(&format!("stage {}: descriptors", t + 1));
-        let (mut xs, mut ys) = samples(&train, s.ring);
+        let (mut xs, mut ys) = samples(&train, &train_rings);
         if xs.len() > s.max_samples {
             let mut idx: Vec<usize> = (0..xs.len()).collect();
             idx.shuffle(&mut rng);
@@ -415,7 +420,7 @@ pub fn train(
             .map(|(_, l, n)| format!("{n} faces mse {l:.5}"))
             .collect();
         stage.nets = trained.into_iter().map(|(n, _, _)| n).collect();
-        let (before, after) = validation(&validation_meshes, &stage, s.ring);
+        let (before, after) = validation(&validation_meshes, &validation_rings, &stage);
         report.push(format!(
             "stage {}: clusters [{}]; validation mean normal angle {before:.2}° -> {after:.2}° (regressed normals vs ground truth)",
             t + 1,
@@ -425,8 +430,13 @@ pub fn train(
             "stage {}: validation {before:.2}° -> {after:.2}°",
             t + 1
         ));
-        advance(&mut train, &stage, s.vertex_iterations, s.ring);
-        advance(&mut validation_meshes, &stage, s.vertex_iterations, s.ring);
+        advance(&mut train, &train_rings, &stage, s.vertex_iterations);
+        advance(
+            &mut validation_meshes,
+            &validation_rings,
+            &stage,
+            s.vertex_iterations,
+        );
         stages.push(stage);
         progress.advance(1);
     }
