@@ -139,14 +139,28 @@ impl ModelConfig {
     /// the `burn` feature), zero biases and identity batch norms.
     pub fn init_weights(&self, seed: u64) -> NetWeights {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        self.weights_from(|n, std| truncated_normal(&mut rng, n, std))
+    }
+
+    /// A network of this architecture with every weight zero (identity
+    /// batch norms): the shapes to read a weight file into, without drawing
+    /// random numbers.
+    pub fn zero_weights(&self) -> NetWeights {
+        self.weights_from(|n, _| vec![0.0; n])
+    }
+
+    /// The network whose convolution and linear weights are `draw(count,
+    /// He std)`, drawn in layer order.
+    fn weights_from(&self, mut draw: impl FnMut(usize, f64) -> Vec<f32>) -> NetWeights {
+        let rng = &mut draw;
         let c = self.channels;
-        let stem = conv(&mut rng, 3, c[0], 5, 1, 2);
+        let stem = conv(rng, 3, c[0], 5, 1, 2);
         let mut blocks = Vec::with_capacity(3);
         let mut c_in = c[0];
         for &c_out in &c {
-            let conv_a = conv(&mut rng, c_in, c_out, 3, 2, 1);
-            let conv_b = conv(&mut rng, c_out, c_out, 3, 1, 1);
-            let shortcut = conv(&mut rng, c_in, c_out, 1, 2, 0);
+            let conv_a = conv(rng, c_in, c_out, 3, 2, 1);
+            let conv_b = conv(rng, c_out, c_out, 3, 1, 1);
+            let shortcut = conv(rng, c_in, c_out, 1, 2, 0);
             blocks.push(BlockWeights {
                 conv_a,
                 bn_a: batch_norm(c_out),
@@ -159,10 +173,10 @@ impl ModelConfig {
         }
         let mut hidden = Vec::with_capacity(3);
         for &h in &self.hidden {
-            hidden.push((linear(&mut rng, c_in, h), batch_norm(h)));
+            hidden.push((linear(rng, c_in, h), batch_norm(h)));
             c_in = h;
         }
-        let output = linear(&mut rng, c_in, self.outputs);
+        let output = linear(rng, c_in, self.outputs);
         NetWeights {
             grid: self.grid,
             stem,
@@ -190,7 +204,7 @@ pub(crate) fn truncated_normal(rng: &mut ChaCha8Rng, n: usize, std: f64) -> Vec<
 }
 
 fn conv(
-    rng: &mut ChaCha8Rng,
+    draw: &mut impl FnMut(usize, f64) -> Vec<f32>,
     c_in: usize,
     c_out: usize,
     k: usize,
@@ -199,7 +213,7 @@ fn conv(
 ) -> ConvWeights {
     let fan_in = c_in * k * k * k;
     ConvWeights {
-        weight: truncated_normal(rng, c_out * fan_in, (2.0 / fan_in as f64).sqrt()),
+        weight: draw(c_out * fan_in, (2.0 / fan_in as f64).sqrt()),
         bias: None,
         in_channels: c_in,
         out_channels: c_out,
@@ -209,9 +223,13 @@ fn conv(
     }
 }
 
-fn linear(rng: &mut ChaCha8Rng, d_in: usize, d_out: usize) -> LinearWeights {
+fn linear(
+    draw: &mut impl FnMut(usize, f64) -> Vec<f32>,
+    d_in: usize,
+    d_out: usize,
+) -> LinearWeights {
     LinearWeights {
-        weight: truncated_normal(rng, d_in * d_out, (2.0 / d_in as f64).sqrt()),
+        weight: draw(d_in * d_out, (2.0 / d_in as f64).sqrt()),
         bias: Some(vec![0.0; d_out]),
         in_features: d_in,
         out_features: d_out,

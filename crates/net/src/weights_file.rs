@@ -110,8 +110,8 @@ pub fn to_bytes(w: &NetWeights) -> Result<Vec<u8>, String> {
 pub fn from_bytes(config: &ModelConfig, bytes: &[u8]) -> Result<NetWeights, String> {
     let file =
         SafeTensors::deserialize(bytes).map_err(|e| format!("not a safetensors file: {e}"))?;
-    // the expected tensors: those of a fresh network of this architecture
-    let mut w = config.init_weights(0);
+    // the expected tensors: those of a network of this architecture
+    let mut w = config.zero_weights();
     let expected = tensors_by_name(&w);
     let mut read: Table = BTreeMap::new();
     for (name, (shape, _)) in &expected {
