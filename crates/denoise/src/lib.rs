@@ -28,8 +28,6 @@ pub mod normalnet;
 pub mod oracle;
 pub mod params;
 pub mod registry;
-#[cfg(test)]
-mod test_meshes;
 
 pub use error::DenoiseError;
 pub use params::Params;
@@ -122,7 +120,7 @@ mod tests {
     use normalnet_mesh::NoProgress;
 
     fn plane() -> Mesh {
-        crate::test_meshes::height_grid(6, |i, j| 0.01 * ((i * 7 + j * 3) % 5) as f64)
+        Mesh::height_grid(6, |i, j| 0.01 * ((i * 7 + j * 3) % 5) as f64)
     }
 
     #[test]

@@ -210,11 +210,10 @@ impl crate::ClassicalMethod for BiParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_meshes::height_grid;
 
     /// A noise-free V-shaped grid `z = |x − k/2|` (a 90° valley along x = k/2).
     fn valley(k: usize) -> Mesh {
-        height_grid(k, |x, _| (x as f64 - k as f64 / 2.0).abs())
+        Mesh::height_grid(k, |x, _| (x as f64 - k as f64 / 2.0).abs())
     }
 
     #[test]

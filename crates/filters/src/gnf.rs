@@ -343,11 +343,10 @@ impl crate::ClassicalMethod for GnfParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_meshes::height_grid;
 
     /// Flat `k × k` grid of squares split into triangles, in the z = 0 plane.
     pub(crate) fn grid(k: usize) -> Mesh {
-        height_grid(k, |_, _| 0.0)
+        Mesh::height_grid(k, |_, _| 0.0)
     }
 
     #[test]

@@ -273,12 +273,11 @@ pub fn gt_guided_gnf(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_meshes::height_grid;
     use normalnet_mesh::geometry::face_normals;
 
     /// A `k × k` grid with small deterministic bumps.
     fn bumpy_grid(k: usize) -> Mesh {
-        height_grid(k, |x, y| 0.05 * (((x * 7 + y * 13) % 5) as f64 - 2.0))
+        Mesh::height_grid(k, |x, y| 0.05 * (((x * 7 + y * 13) % 5) as f64 - 2.0))
     }
 
     #[test]

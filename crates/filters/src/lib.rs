@@ -22,8 +22,6 @@ pub mod gt_guided;
 pub mod l0;
 pub mod stats;
 pub mod sun07;
-#[cfg(test)]
-mod test_meshes;
 pub mod vertex_update;
 pub mod vt;
 

@@ -122,7 +122,7 @@ mod tests {
     use normalnet_mesh::{Mesh, Topology};
 
     fn bumpy() -> Mesh {
-        crate::test_meshes::height_grid(8, |i, j| {
+        Mesh::height_grid(8, |i, j| {
             let (x, y) = (i as f64, j as f64);
             0.3 * (x * 0.7).sin() * (y * 0.5).cos() + 0.05 * ((i * 7 + j * 3) % 5) as f64
         })
