@@ -15,6 +15,10 @@ struct Cli {
     /// No progress bars.
     #[arg(long, short, global = true)]
     quiet: bool,
+    /// Worker threads (default: every core, or $RAYON_NUM_THREADS). Results
+    /// do not depend on it.
+    #[arg(long, short = 'j', global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
     #[command(subcommand)]
     command: Command,
 }
@@ -51,6 +55,13 @@ enum Command {
 fn main() {
     let cli = Cli::parse();
     let quiet = cli.quiet;
+    if let Some(n) = cli.threads {
+        // Only fails when a pool already exists, which cannot be the case
+        // before any work.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::from(n))
+            .build_global();
+    }
     // SIGINT / SIGTERM end the process without running destructors, so a
     // temporary output file being written would stay behind: sweep this
     // process's temporary files from the checked output folders, then exit

@@ -219,3 +219,25 @@ fn bad_flags_are_clear_errors() {
     let o = normalnet(&["denoise", s(&missing), s(&out), "-m", "gnf"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.obj"));
 }
+
+#[test]
+fn threads_flag_sets_the_pool_and_does_not_change_the_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let noisy_path = dir.path().join("noisy.obj");
+    write_mesh(&noisy_path, &sphere(16, 32, 0.02)).unwrap();
+    let mut outputs = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out = dir.path().join(format!("t{threads}.obj"));
+        let o = normalnet(&[
+            "--threads", threads, "denoise", "-q", "--json", "-m", "gnf", s(&noisy_path), s(&out),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(report["threads"].as_u64(), Some(threads.parse().unwrap()), "{report}");
+        outputs.push(std::fs::read(&out).unwrap());
+    }
+    assert!(outputs.windows(2).all(|w| w[0] == w[1]), "output depends on --threads");
+    let o = normalnet(&["--threads", "0", "info", s(&noisy_path)]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--threads"));
+}
