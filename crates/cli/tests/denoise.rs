@@ -229,14 +229,29 @@ fn threads_flag_sets_the_pool_and_does_not_change_the_result() {
     for threads in ["1", "2", "3"] {
         let out = dir.path().join(format!("t{threads}.obj"));
         let o = normalnet(&[
-            "--threads", threads, "denoise", "-q", "--json", "-m", "gnf", s(&noisy_path), s(&out),
+            "--threads",
+            threads,
+            "denoise",
+            "-q",
+            "--json",
+            "-m",
+            "gnf",
+            s(&noisy_path),
+            s(&out),
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-        assert_eq!(report["threads"].as_u64(), Some(threads.parse().unwrap()), "{report}");
+        assert_eq!(
+            report["threads"].as_u64(),
+            Some(threads.parse().unwrap()),
+            "{report}"
+        );
         outputs.push(std::fs::read(&out).unwrap());
     }
-    assert!(outputs.windows(2).all(|w| w[0] == w[1]), "output depends on --threads");
+    assert!(
+        outputs.windows(2).all(|w| w[0] == w[1]),
+        "output depends on --threads"
+    );
     let o = normalnet(&["--threads", "0", "info", s(&noisy_path)]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--threads"));

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use normalnet_filters::FOLD_GUARD_COS;
+use normalnet_filters::{FOLD_GUARD_COS, GnfParams};
 use normalnet_mesh::outliers::denoise_around;
 use normalnet_mesh::{Mesh, Progress};
 use normalnet_net::{Bundle, DenoiseParams};
@@ -55,6 +55,14 @@ pub struct NormalnetParams {
     /// with the guided form: faces whose guided normal turns more than this
     /// many degrees from the network's keep the network's (0 = no limit)
     pub guided_max_turn_deg: f64,
+    /// with the guided form: only where the network's 1-ring normals are
+    /// flat (this fraction within this angle); 0 = everywhere
+    pub guided_flat_deg: f64,
+    /// see `guided_flat_deg` (0.5)
+    pub guided_flat_frac: f64,
+    /// GNF normal passes (reference settings but μ_g = `mu_g`, 10 vertex
+    /// passes each) run on NormalNet's result (0 = none, the paper's form)
+    pub gnf_after: usize,
     /// the fold guard of the vertex update (on)
     pub fold_guard: bool,
     /// the guard's cone: cos of the largest turn of a face away from its
@@ -72,6 +80,9 @@ impl Default for NormalnetParams {
             mu_g: d.mu_g,
             guided_from: d.guided_from,
             guided_max_turn_deg: d.guided_max_turn_deg,
+            guided_flat_deg: d.guided_flat_deg,
+            guided_flat_frac: d.guided_flat_frac,
+            gnf_after: 0,
             fold_guard: d.fold_guard.is_some(),
             fold_guard_cos: d.fold_guard.unwrap_or(FOLD_GUARD_COS),
         }
@@ -87,6 +98,8 @@ impl NormalnetParams {
             mu_g: self.mu_g,
             guided_from: self.guided_from,
             guided_max_turn_deg: self.guided_max_turn_deg,
+            guided_flat_deg: self.guided_flat_deg,
+            guided_flat_frac: self.guided_flat_frac,
             fold_guard: self.fold_guard.then_some(self.fold_guard_cos),
             ..DenoiseParams::default()
         }
@@ -166,7 +179,16 @@ impl Method for NormalNet {
         let mesh = denoise_around(mesh, |m| {
             let (out, times) = normalnet_net::denoise(m, &self.bundle, &params, progress)?;
             stages = Some(times);
-            Ok::<_, DenoiseError>(out)
+            if self.params.gnf_after == 0 {
+                return Ok::<_, DenoiseError>(out);
+            }
+            let gnf = GnfParams {
+                mu_g: self.params.mu_g,
+                normal_iterations: self.params.gnf_after,
+                fold_guard: self.params.fold_guard,
+                ..GnfParams::default()
+            };
+            Ok(normalnet_filters::gnf(&out, &gnf, progress)?)
         })?;
         Ok(Outcome { mesh, stages })
     }

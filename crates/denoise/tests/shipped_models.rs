@@ -70,3 +70,28 @@ fn cnr_stages_and_a_broken_model_file() {
         "{e}"
     );
 }
+
+#[test]
+fn gnf_after_is_gnf_run_on_normalnets_result() {
+    let (_, noisy) = shape();
+    let mut p = Params::new();
+    p.insert("iterations".into(), 2.into());
+    let plain = Denoiser::new("normalnet", &p)
+        .unwrap()
+        .denoise(&noisy, None, &NoProgress)
+        .unwrap();
+    p.insert("gnf_after".into(), 3.into());
+    let hybrid = Denoiser::new("normalnet", &p)
+        .unwrap()
+        .denoise(&noisy, None, &NoProgress)
+        .unwrap();
+    let mut g = Params::new();
+    g.insert("normal_iterations".into(), 3.into());
+    g.insert("mu_g".into(), 0.35.into());
+    let expected = Denoiser::new("gnf", &g)
+        .unwrap()
+        .denoise(&plain, None, &NoProgress)
+        .unwrap();
+    assert_ne!(hybrid.positions, plain.positions);
+    assert_eq!(hybrid.positions, expected.positions);
+}

@@ -37,7 +37,13 @@ fn every_seed_reads_and_cubes_are_the_same_cube() {
             let bytes = std::fs::read(&path).unwrap();
             let mesh = parse_mesh(&bytes, format, &path)
                 .unwrap_or_else(|e| panic!("seed {} does not read: {e}", path.display()));
-            if path.file_name().unwrap().to_str().unwrap().starts_with("cube") {
+            if path
+                .file_name()
+                .unwrap()
+                .to_str()
+                .unwrap()
+                .starts_with("cube")
+            {
                 cubes += 1;
                 assert_eq!(mesh.num_faces(), 12, "{}", path.display());
                 assert_eq!(mesh.num_vertices(), 8, "{}", path.display());
@@ -47,7 +53,11 @@ fn every_seed_reads_and_cubes_are_the_same_cube() {
                         0.5 * vec3::norm(vec3::cross(vec3::sub(b, a), vec3::sub(c, a)))
                     })
                     .sum();
-                assert!((area - 6.0).abs() < 1e-12, "{}: area {area}", path.display());
+                assert!(
+                    (area - 6.0).abs() < 1e-12,
+                    "{}: area {area}",
+                    path.display()
+                );
             }
         }
     }
@@ -61,7 +71,10 @@ fn fuzz_regressions_never_panic() {
             let bytes = std::fs::read(&path).unwrap();
             // Ok or a clear error naming the file; a panic fails the test.
             if let Err(e) = parse_mesh(&bytes, format, &path) {
-                assert!(e.to_string().contains(path.file_name().unwrap().to_str().unwrap()));
+                assert!(
+                    e.to_string()
+                        .contains(path.file_name().unwrap().to_str().unwrap())
+                );
             }
         }
     }

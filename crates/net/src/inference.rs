@@ -48,6 +48,14 @@ pub struct DenoiseParams {
     /// guided pass smooths what the network's guidance cannot separate:
     /// fine detail); 0 = no limit.
     pub guided_max_turn_deg: f64,
+    /// With the guided form: apply it only to faces whose 1-ring (vertex-
+    /// adjacent faces) is locally flat in the network's output — at least
+    /// `guided_flat_frac` of the ring's network normals within
+    /// `guided_flat_deg` of the face's — and keep the network's normal
+    /// elsewhere (curved, organic or very noisy parts); 0 = every face
+    pub guided_flat_deg: f64,
+    /// see `guided_flat_deg` (default 0.5)
+    pub guided_flat_frac: f64,
     /// the fold guard of the shared vertex update
     /// (`normalnet_filters::vertex_update`): `Some(cos)` keeps a face within
     /// `acos(cos)` of its filtered normal (default [`FOLD_GUARD_COS`], 60°;
@@ -64,6 +72,8 @@ impl Default for DenoiseParams {
             batch: 256,
             guided_from: 0,
             guided_max_turn_deg: 0.0,
+            guided_flat_deg: 0.0,
+            guided_flat_frac: 0.5,
             fold_guard: Some(FOLD_GUARD_COS),
         }
     }
@@ -88,6 +98,18 @@ impl DenoiseParams {
             return Err(NetError::InvalidParameter {
                 name: "batch",
                 message: "must be at least 1".into(),
+            });
+        }
+        if !(self.guided_flat_deg.is_finite() && (0.0..=180.0).contains(&self.guided_flat_deg)) {
+            return Err(NetError::InvalidParameter {
+                name: "guided_flat_deg",
+                message: format!("{} must lie in 0..=180 degrees", self.guided_flat_deg),
+            });
+        }
+        if !(0.0..=1.0).contains(&self.guided_flat_frac) {
+            return Err(NetError::InvalidParameter {
+                name: "guided_flat_frac",
+                message: format!("{} must lie in 0..=1", self.guided_flat_frac),
             });
         }
         if !(self.guided_max_turn_deg.is_finite()
@@ -172,7 +194,20 @@ pub fn denoise(
                 &[params.mu_g],
                 GT_GUIDED_SIGMA_S,
             );
-            if params.guided_max_turn_deg > 0.0 {
+            if params.guided_flat_deg > 0.0 {
+                let cos_t = params.guided_flat_deg.to_radians().cos();
+                let flat = |f: usize| {
+                    let ring = topology.face_neighbours.row(f);
+                    let close = ring
+                        .iter()
+                        .filter(|&&g| vec3::dot(normals[f], normals[g as usize]) >= cos_t)
+                        .count();
+                    !ring.is_empty() && close as f64 >= params.guided_flat_frac * ring.len() as f64
+                };
+                (0..normals.len())
+                    .map(|f| if flat(f) { guided[f] } else { normals[f] })
+                    .collect()
+            } else if params.guided_max_turn_deg > 0.0 {
                 let limit = params.guided_max_turn_deg.to_radians();
                 guided
                     .iter()
@@ -515,5 +550,37 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn the_flat_rule_chooses_between_the_guided_and_the_paper_form() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = new_manifest("tiny").unwrap();
+        let nets: Vec<normalnet_cnn::NetWeights> = (0..6)
+            .map(|i| ModelConfig::tiny().init_weights(i))
+            .collect();
+        save_bundle(dir.path(), &manifest, &nets).unwrap();
+        let bundle = Bundle::load(dir.path()).unwrap();
+        let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+        let run = |guided_from: usize, flat_deg: f64| {
+            let params = DenoiseParams {
+                iterations: 2,
+                vertex_iterations: 2,
+                guided_from,
+                guided_flat_deg: flat_deg,
+                ..DenoiseParams::default()
+            };
+            denoise(&mesh, &bundle, &params, &NoProgress)
+                .unwrap()
+                .0
+                .positions
+        };
+        let paper = run(0, 0.0);
+        let guided = run(1, 0.0);
+        assert_ne!(paper, guided);
+        // every ring normal within 180°: every face flat, the guided form
+        assert_eq!(run(1, 180.0), guided);
+        // within 1e-9°: no face flat (random networks), the paper's form
+        assert_eq!(run(1, 1e-9), paper);
     }
 }
