@@ -15,7 +15,8 @@ pub fn check_reader(bytes: &[u8], format: Format) {
     };
     assert!(mesh.num_faces() > 0 && !mesh.positions.is_empty());
     assert!(mesh.positions.iter().flatten().all(|x| x.is_finite()));
-    let encoded = encode_mesh(&mesh, format, &WriteOptions::default());
+    let encoded = encode_mesh(&mesh, format, &WriteOptions::default())
+        .unwrap_or_else(|e| panic!("a mesh the reader accepted cannot be written: {e}"));
     let again = parse_mesh(&encoded, format, path)
         .unwrap_or_else(|e| panic!("a mesh the reader accepted does not read back: {e}"));
     match format {

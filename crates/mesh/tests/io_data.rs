@@ -69,7 +69,7 @@ fn bunny_loads_fast_and_round_trips_through_every_format() {
         (Format::Ply, false),
         (Format::Ply, true),
     ] {
-        let bytes = encode_mesh(&m, f, &WriteOptions { ply_ascii: ascii });
+        let bytes = encode_mesh(&m, f, &WriteOptions { ply_ascii: ascii }).unwrap();
         let back = parse_mesh(&bytes, f, Path::new("mem")).unwrap();
         assert!(back == m, "{f:?} ascii={ascii} is not bit-exact");
     }

@@ -63,7 +63,7 @@ proptest! {
     #[test]
     fn text_and_binary_round_trips_are_bit_exact(m in mesh_strategy(false)) {
         for (f, ascii) in [(Format::Obj, false), (Format::Off, false), (Format::Ply, false), (Format::Ply, true)] {
-            let bytes = encode_mesh(&m, f, &WriteOptions { ply_ascii: ascii });
+            let bytes = encode_mesh(&m, f, &WriteOptions { ply_ascii: ascii }).unwrap();
             let back = parse_mesh(&bytes, f, Path::new("p")).unwrap();
             prop_assert!(bit_equal(&back, &m), "{:?} ascii={}", f, ascii);
         }
@@ -71,7 +71,7 @@ proptest! {
 
     #[test]
     fn stl_round_trip_keeps_geometry(m in mesh_strategy(true)) {
-        let bytes = encode_mesh(&m, Format::Stl, &WriteOptions::default());
+        let bytes = encode_mesh(&m, Format::Stl, &WriteOptions::default()).unwrap();
         let back = parse_mesh(&bytes, Format::Stl, Path::new("p.stl")).unwrap();
         prop_assert_eq!(triangles(&back), triangles(&m));
         // Merging is by bit pattern: as many vertices as distinct used positions.
@@ -94,7 +94,11 @@ proptest! {
         edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>(), 0u8..3), 1..8),
     ) {
         let (f, ascii) = [(Format::Obj, false), (Format::Off, false), (Format::Ply, false), (Format::Ply, true), (Format::Stl, false)][which];
-        let mut bytes = encode_mesh(&m, f, &WriteOptions { ply_ascii: ascii });
+        // STL refuses coordinates beyond f32 (tested in io::tests)
+        let Ok(mut bytes) = encode_mesh(&m, f, &WriteOptions { ply_ascii: ascii }) else {
+            prop_assert!(f == Format::Stl);
+            return Ok(());
+        };
         for (at, b, op) in edits {
             if bytes.is_empty() { break; }
             let i = at.index(bytes.len());

@@ -165,17 +165,22 @@ pub fn write_mesh_as(
 }
 
 /// Encodes a mesh into memory (what [`write_mesh_as`] would write).
-pub fn encode_mesh(mesh: &Mesh, format: Format, options: &WriteOptions) -> Vec<u8> {
+///
+/// # Errors
+/// A mesh the format cannot hold (STL: a coordinate beyond f32's range).
+pub fn encode_mesh(
+    mesh: &Mesh,
+    format: Format,
+    options: &WriteOptions,
+) -> std::io::Result<Vec<u8>> {
     let mut out = Vec::new();
-    let r = match format {
+    match format {
         Format::Obj => obj::write(&mut out, mesh),
         Format::Off => off::write(&mut out, mesh),
         Format::Ply => ply::write(&mut out, mesh, options.ply_ascii),
         Format::Stl => stl::write(&mut out, mesh),
-    };
-    // Writing into a Vec cannot fail.
-    debug_assert!(r.is_ok());
-    out
+    }?;
+    Ok(out)
 }
 
 /// The folder [`write_atomically`] puts its temporary file in: the parent of

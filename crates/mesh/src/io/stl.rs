@@ -205,6 +205,18 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                             format!("non-finite coordinate {:?}", show(t)),
                         ));
                     }
+                    // STL is f32 by definition (binary files cannot hold
+                    // more); a text value beyond it could not be written back
+                    if (*c as f32).is_infinite() {
+                        return Err(perr(
+                            path,
+                            ln,
+                            format!(
+                                "coordinate {:?} is beyond the range of STL's 32-bit floats",
+                                show(t)
+                            ),
+                        ));
+                    }
                 }
                 poly.push(weld.index(p));
                 State::Loop
@@ -237,6 +249,20 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
 }
 
 pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
+    // STL stores f32: a coordinate beyond its range would be written as an
+    // infinity that no reader (ours included) accepts.
+    for (v, p) in mesh.positions.iter().enumerate() {
+        if let Some(x) = p.iter().find(|x| (**x as f32).is_infinite()) {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "vertex {v} has coordinate {x:e}, beyond the range of STL's 32-bit floats \
+                     (|x| <= {:e}); write OBJ, OFF or PLY instead",
+                    f32::MAX
+                ),
+            ));
+        }
+    }
     let mut header = [b' '; 80];
     let text = b"binary STL written by normalnet";
     header[..text.len()].copy_from_slice(text);

@@ -131,7 +131,7 @@ fn every_format_round_trips_in_memory() {
         (Format::Ply, true),
         (Format::Stl, false),
     ] {
-        let bytes = encode_mesh(&m, format, &WriteOptions { ply_ascii: ascii });
+        let bytes = encode_mesh(&m, format, &WriteOptions { ply_ascii: ascii }).unwrap();
         let back = parse_mesh(&bytes, format, Path::new("m")).unwrap();
         assert_eq!(back, m, "{format:?} ascii={ascii}");
     }
@@ -313,7 +313,7 @@ fn stl_ascii_binary_merge_and_errors() {
     let m = parse_mesh(s.as_bytes(), Format::Stl, Path::new("a.stl")).unwrap();
     assert_eq!(m.num_vertices(), 4);
     assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
-    let bin = encode_mesh(&m, Format::Stl, &WriteOptions::default());
+    let bin = encode_mesh(&m, Format::Stl, &WriteOptions::default()).unwrap();
     assert_eq!(bin.len(), 84 + 100);
     assert_eq!(parse_mesh(&bin, Format::Stl, p()).unwrap(), m);
     let e = parse_mesh(&bin[..150], Format::Stl, Path::new("a.stl"))
@@ -366,11 +366,7 @@ fn issue_14_obj_with_byte_order_mark_keeps_its_first_vertex() {
         (Format::Ply, false),
     ] {
         let mut bytes = BOM.to_vec();
-        bytes.extend(encode_mesh(
-            &plain,
-            format,
-            &WriteOptions { ply_ascii: ascii },
-        ));
+        bytes.extend(encode_mesh(&plain, format, &WriteOptions { ply_ascii: ascii }).unwrap());
         let back = parse_mesh(&bytes, format, p()).unwrap();
         assert_eq!(back, plain, "{format:?} ascii={ascii}");
     }
@@ -387,14 +383,15 @@ fn issue_14_crlf_and_cr_line_ends_read_like_lf() {
     for (format, name) in [(Format::Off, "crlf.off"), (Format::Stl, "crlf.stl")] {
         let text = match format {
             Format::Off => {
-                String::from_utf8(encode_mesh(&plain, format, &WriteOptions::default())).unwrap()
+                String::from_utf8(encode_mesh(&plain, format, &WriteOptions::default()).unwrap())
+                    .unwrap()
             }
             _ => ascii_stl(&plain, "solid", "facet"),
         };
         let (_dir, r) = read_temp(name, text.replace('\n', "\r\n").as_bytes());
         assert_eq!(r.unwrap(), plain, "{name}");
     }
-    let ply = encode_mesh(&plain, Format::Ply, &WriteOptions { ply_ascii: true });
+    let ply = encode_mesh(&plain, Format::Ply, &WriteOptions { ply_ascii: true }).unwrap();
     let ply = String::from_utf8(ply).unwrap().replace('\n', "\r\n");
     let (_dir, r) = read_temp("crlf.ply", ply.as_bytes());
     assert_eq!(r.unwrap(), plain);
@@ -430,7 +427,8 @@ fn issue_14_uppercase_keywords() {
     let (_dir, r) = read_temp("upper.obj", QUAD_OBJ.to_ascii_uppercase().as_bytes());
     assert_eq!(r.unwrap(), plain);
     let off =
-        String::from_utf8(encode_mesh(&plain, Format::Off, &WriteOptions::default())).unwrap();
+        String::from_utf8(encode_mesh(&plain, Format::Off, &WriteOptions::default()).unwrap())
+            .unwrap();
     for head in ["off", "Off", "COFF", "NOFF", "STCNOFF", "stcoff"] {
         let (_dir, r) = read_temp("h.off", off.replacen("OFF", head, 1).as_bytes());
         assert_eq!(r.unwrap(), plain, "{head}");
@@ -450,7 +448,7 @@ fn issue_14_uppercase_keywords() {
 #[test]
 fn issue_14_binary_stl_size_rule() {
     let m = parse_obj(QUAD_OBJ).unwrap();
-    let bin = encode_mesh(&m, Format::Stl, &WriteOptions::default());
+    let bin = encode_mesh(&m, Format::Stl, &WriteOptions::default()).unwrap();
     // A binary header that starts with "solid" and even mentions facets is
     // still binary when the size matches 84 + 50·n.
     let mut solid_head = bin.clone();
@@ -562,4 +560,48 @@ fn issue_14_check_writable_before_any_work() {
     }
     // write_atomically's temporary files carry this process's id.
     assert!(temp_prefix().starts_with(".normalnet-") && temp_prefix().ends_with('-'));
+}
+
+/// Found by fuzzing (fuzz/regressions/stl/ascii-coordinate-beyond-f32.stl):
+/// an ASCII STL value beyond f32's range was read (f64) and then written as
+/// an infinity that no reader accepts.
+#[test]
+fn stl_coordinates_beyond_f32_are_refused_when_read_and_when_written() {
+    let tri = |x: &str| {
+        format!(
+            "solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex {x} 0 0\n\
+             vertex 0 1 0\nendloop\nendfacet\nendsolid s\n"
+        )
+    };
+    let e = parse_mesh(tri("1e39").as_bytes(), Format::Stl, Path::new("big.stl")).unwrap_err();
+    let text = e.to_string();
+    assert!(
+        text.contains("big.stl:5") && text.contains("32-bit"),
+        "{text}"
+    );
+    // the largest f32 itself is fine and round-trips
+    let m = parse_mesh(tri("3.4e38").as_bytes(), Format::Stl, p()).unwrap();
+    let bytes = encode_mesh(&m, Format::Stl, &WriteOptions::default()).unwrap();
+    assert_eq!(parse_mesh(&bytes, Format::Stl, p()).unwrap().num_faces(), 1);
+    // a mesh from another format with such a coordinate is not written as STL
+    let big = Mesh::new(
+        vec![[0.0; 3], [1e39, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    let e = encode_mesh(&big, Format::Stl, &WriteOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("vertex 1"), "{e}");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.stl");
+    let e = write_mesh(&out, &big).unwrap_err().to_string();
+    assert!(e.contains("big.stl") && e.contains("32-bit"), "{e}");
+    assert!(!out.exists(), "no partial output");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "temp file left"
+    );
+    // the other formats hold it exactly
+    let obj = encode_mesh(&big, Format::Obj, &WriteOptions::default()).unwrap();
+    assert_eq!(parse_mesh(&obj, Format::Obj, p()).unwrap(), big);
 }
