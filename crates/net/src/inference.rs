@@ -517,15 +517,20 @@ mod tests {
         assert!(off.iter().sum::<f64>() / off.len() as f64 > 0.05);
     }
 
-    #[test]
-    fn denoise_runs_every_interval_without_nan() {
+    /// A bundle of six freshly initialised tiny networks.
+    fn tiny_bundle() -> Bundle {
         let dir = tempfile::tempdir().unwrap();
         let manifest = new_manifest("tiny").unwrap();
         let nets: Vec<normalnet_cnn::NetWeights> = (0..6)
             .map(|i| ModelConfig::tiny().init_weights(i))
             .collect();
         save_bundle(dir.path(), &manifest, &nets).unwrap();
-        let bundle = Bundle::load(dir.path()).unwrap();
+        Bundle::load(dir.path()).unwrap()
+    }
+
+    #[test]
+    fn denoise_runs_every_interval_without_nan() {
+        let bundle = tiny_bundle();
         let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
         let params = DenoiseParams {
             iterations: 11,
@@ -554,13 +559,7 @@ mod tests {
 
     #[test]
     fn the_flat_rule_chooses_between_the_guided_and_the_paper_form() {
-        let dir = tempfile::tempdir().unwrap();
-        let manifest = new_manifest("tiny").unwrap();
-        let nets: Vec<normalnet_cnn::NetWeights> = (0..6)
-            .map(|i| ModelConfig::tiny().init_weights(i))
-            .collect();
-        save_bundle(dir.path(), &manifest, &nets).unwrap();
-        let bundle = Bundle::load(dir.path()).unwrap();
+        let bundle = tiny_bundle();
         let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
         let run = |guided_from: usize, flat_deg: f64| {
             let params = DenoiseParams {
