@@ -156,12 +156,22 @@ pub fn write_mesh_as(
     options: &WriteOptions,
 ) -> Result<(), MeshError> {
     let path = path.as_ref();
-    write_atomically(path, |w| match format {
+    write_atomically(path, |w| write_format(w, mesh, format, options))
+}
+
+/// Writes `mesh` in `format` to `w` (the one dispatch of every writer).
+fn write_format(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    format: Format,
+    options: &WriteOptions,
+) -> std::io::Result<()> {
+    match format {
         Format::Obj => obj::write(w, mesh),
         Format::Off => off::write(w, mesh),
         Format::Ply => ply::write(w, mesh, options.ply_ascii),
         Format::Stl => stl::write(w, mesh),
-    })
+    }
 }
 
 /// Encodes a mesh into memory (what [`write_mesh_as`] would write).
@@ -174,12 +184,7 @@ pub fn encode_mesh(
     options: &WriteOptions,
 ) -> std::io::Result<Vec<u8>> {
     let mut out = Vec::new();
-    match format {
-        Format::Obj => obj::write(&mut out, mesh),
-        Format::Off => off::write(&mut out, mesh),
-        Format::Ply => ply::write(&mut out, mesh, options.ply_ascii),
-        Format::Stl => stl::write(&mut out, mesh),
-    }?;
+    write_format(&mut out, mesh, format, options)?;
     Ok(out)
 }
 
