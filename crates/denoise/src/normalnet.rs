@@ -68,6 +68,13 @@ pub struct NormalnetParams {
     /// the guard's cone: cos of the largest turn of a face away from its
     /// filtered normal (0.5 = 60°; 0 refuses only flips)
     pub fold_guard_cos: f64,
+    /// converged faces stop being filtered: a face whose network output
+    /// turned less than this many degrees between two iterations keeps it
+    /// (0 = off: every face every iteration)
+    pub freeze_deg: f64,
+    /// stop after an iteration whose outputs turned less than this many
+    /// degrees on average (`iterations` is then the most; 0 = off)
+    pub auto_stop_deg: f64,
 }
 
 impl Default for NormalnetParams {
@@ -85,6 +92,8 @@ impl Default for NormalnetParams {
             gnf_after: 0,
             fold_guard: d.fold_guard.is_some(),
             fold_guard_cos: d.fold_guard.unwrap_or(FOLD_GUARD_COS),
+            freeze_deg: d.freeze_deg,
+            auto_stop_deg: d.auto_stop_deg,
         }
     }
 }
@@ -101,6 +110,8 @@ impl NormalnetParams {
             guided_flat_deg: self.guided_flat_deg,
             guided_flat_frac: self.guided_flat_frac,
             fold_guard: self.fold_guard.then_some(self.fold_guard_cos),
+            freeze_deg: self.freeze_deg,
+            auto_stop_deg: self.auto_stop_deg,
             ..DenoiseParams::default()
         }
     }

@@ -61,6 +61,17 @@ pub struct DenoiseParams {
     /// `acos(cos)` of its filtered normal (default [`FOLD_GUARD_COS`], 60°;
     /// `Some(0.0)` refuses only the flip itself), `None` switches it off
     pub fold_guard: Option<f64>,
+    /// Converged faces stop being filtered: a face whose network output
+    /// turned less than this many degrees between two consecutive
+    /// iterations keeps that output for the rest of the run and is no
+    /// longer voxelized (0 = off, every face every iteration: the exact
+    /// pipeline).
+    pub freeze_deg: f64,
+    /// The run stops by itself after an iteration whose outputs turned, on
+    /// average over all faces, less than this many degrees from the
+    /// previous iteration's (`iterations` is then the most it runs;
+    /// 0 = off, always `iterations`).
+    pub auto_stop_deg: f64,
 }
 
 impl Default for DenoiseParams {
@@ -75,6 +86,8 @@ impl Default for DenoiseParams {
             guided_flat_deg: 0.0,
             guided_flat_frac: 0.5,
             fold_guard: Some(FOLD_GUARD_COS),
+            freeze_deg: 0.0,
+            auto_stop_deg: 0.0,
         }
     }
 }
@@ -112,6 +125,17 @@ impl DenoiseParams {
                 message: format!("{} must lie in 0..=1", self.guided_flat_frac),
             });
         }
+        for (name, v) in [
+            ("freeze_deg", self.freeze_deg),
+            ("auto_stop_deg", self.auto_stop_deg),
+        ] {
+            if !(v.is_finite() && (0.0..=180.0).contains(&v)) {
+                return Err(NetError::InvalidParameter {
+                    name,
+                    message: format!("{v} must lie in 0..=180 degrees"),
+                });
+            }
+        }
         if !(self.guided_max_turn_deg.is_finite()
             && (0.0..=180.0).contains(&self.guided_max_turn_deg))
         {
@@ -137,6 +161,22 @@ pub struct StageTimes {
     pub total_s: f64,
     /// faces voxelized and run through the network (all iterations)
     pub faces_processed: usize,
+    /// one entry per filtering iteration that ran
+    pub iterations: Vec<IterationStats>,
+}
+
+/// What one filtering iteration did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct IterationStats {
+    /// the network that served it (1-based)
+    pub network: usize,
+    /// faces voxelized and run through the network (the others were frozen)
+    pub faces_evaluated: usize,
+    /// mean angle in degrees between this iteration's filtered normals and
+    /// the previous iteration's, over all faces (0 in the first)
+    pub mean_change_deg: f64,
+    /// wall-clock seconds of the iteration
+    pub seconds: f64,
 }
 
 impl StageTimes {
@@ -167,13 +207,21 @@ pub fn denoise(
     let mut positions = mesh.positions.clone();
     let mut buffers = VertexUpdateBuffers::default();
     let mut times = StageTimes::default();
-    let total = (params.iterations * mesh.num_faces()) as u64;
+    let n = mesh.num_faces();
+    let total = (params.iterations * n) as u64;
     progress.start("NormalNet", total);
+    // the previous iteration's filtered normals, and the faces that stopped
+    // being filtered (`freeze_deg`)
+    let mut previous: Option<Vec<Vec3>> = None;
+    let mut frozen = vec![false; n];
     for k in 1..=params.iterations {
+        let iteration_start = Instant::now();
         progress.message(&format!("iteration {k}/{}", params.iterations));
         let current = mesh.with_positions(positions.clone());
         let i = network_for_iteration(k);
-        let (normals, t) = filtered_normals(
+        let active: Vec<u32> = (0..n as u32).filter(|&f| !frozen[f as usize]).collect();
+        let mut normals = previous.clone().unwrap_or_else(|| vec![[0.0; 3]; n]);
+        let t = filtered_normals_of(
             &current,
             &topology,
             &bundle.engines[i],
@@ -181,10 +229,28 @@ pub fn denoise(
             bundle.voxel_params(),
             slot,
             params.batch,
-            None,
+            &active,
+            &mut normals,
             progress,
         )?;
+        progress.advance((n - active.len()) as u64);
         times.add(&t);
+        let mean_change_deg = match &previous {
+            Some(p) => {
+                let changes: Vec<f64> = active
+                    .iter()
+                    .map(|&f| vec3::angle(p[f as usize], normals[f as usize]).to_degrees())
+                    .collect();
+                if params.freeze_deg > 0.0 {
+                    for (&f, &c) in active.iter().zip(&changes) {
+                        frozen[f as usize] = c < params.freeze_deg;
+                    }
+                }
+                changes.iter().sum::<f64>() / n as f64
+            }
+            None => 0.0,
+        };
+        previous = Some(normals.clone());
         let t = Instant::now();
         let normals = if params.guided_from > 0 && k >= params.guided_from {
             let guided = gt_guided_normals(
@@ -233,6 +299,15 @@ pub fn denoise(
             &mut buffers,
         );
         times.vertex_update_s += t.elapsed().as_secs_f64();
+        times.iterations.push(IterationStats {
+            network: i + 1,
+            faces_evaluated: active.len(),
+            mean_change_deg,
+            seconds: iteration_start.elapsed().as_secs_f64(),
+        });
+        if k > 1 && mean_change_deg < params.auto_stop_deg {
+            break;
+        }
     }
     progress.finish();
     times.total_s = start.elapsed().as_secs_f64();
@@ -264,6 +339,63 @@ pub fn filtered_normals(
     yaws: Option<&[f64]>,
     progress: &dyn Progress,
 ) -> Result<(Vec<Vec3>, StageTimes), NetError> {
+    let mut normals = vec![[0.0; 3]; mesh.num_faces()];
+    let faces: Vec<u32> = (0..mesh.num_faces() as u32).collect();
+    let times = filtered_normals_impl(
+        mesh,
+        topology,
+        cnn,
+        residual,
+        voxel,
+        slot,
+        batch,
+        &faces,
+        yaws,
+        &mut normals,
+        progress,
+    )?;
+    Ok((normals, times))
+}
+
+/// [`filtered_normals`] of the listed `faces` only, written into their
+/// entries of `normals` (len #F; the other entries are left as they are).
+/// No yaw. Returns the stage times.
+///
+/// # Errors
+/// As [`filtered_normals`].
+#[allow(clippy::too_many_arguments)]
+pub fn filtered_normals_of(
+    mesh: &Mesh,
+    topology: &Topology,
+    cnn: &Cnn,
+    residual: bool,
+    voxel: VoxelParams,
+    slot: usize,
+    batch: usize,
+    faces: &[u32],
+    normals: &mut [Vec3],
+    progress: &dyn Progress,
+) -> Result<StageTimes, NetError> {
+    filtered_normals_impl(
+        mesh, topology, cnn, residual, voxel, slot, batch, faces, None, normals, progress,
+    )
+}
+
+/// `yaws` is indexed by face.
+#[allow(clippy::too_many_arguments)]
+fn filtered_normals_impl(
+    mesh: &Mesh,
+    topology: &Topology,
+    cnn: &Cnn,
+    residual: bool,
+    voxel: VoxelParams,
+    slot: usize,
+    batch: usize,
+    faces: &[u32],
+    yaws: Option<&[f64]>,
+    normals: &mut [Vec3],
+    progress: &dyn Progress,
+) -> Result<StageTimes, NetError> {
     let mut times = StageTimes::default();
     let t = Instant::now();
     let voxelizer = Voxelizer::new(mesh, topology, voxel)?;
@@ -279,10 +411,9 @@ pub fn filtered_normals(
     }
     let fallback = face_normals(mesh);
     times.voxelize_s += t.elapsed().as_secs_f64();
-    let n = mesh.num_faces();
+    let n = faces.len();
     let grid_len = voxel.grid_len();
     let batch = batch.max(1);
-    let mut normals = vec![[0.0; 3]; n];
     // two buffers in flight: one being voxelized, one in the network
     let (full_tx, full_rx) = sync_channel::<(usize, Vec<f32>, Vec<Frame>, f64)>(1);
     let (empty_tx, empty_rx) = sync_channel::<Vec<f32>>(3);
@@ -291,10 +422,8 @@ pub fn filtered_normals(
             .send(Vec::with_capacity(batch.min(n) * grid_len))
             .ok();
     }
-    let faces: Vec<u32> = (0..n as u32).collect();
     let result = std::thread::scope(|scope| -> Result<(), NetError> {
         let voxelizer = &voxelizer;
-        let faces = &faces;
         // owned here so that an early error return drops them and the
         // producer stops instead of blocking
         let full_rx = full_rx;
@@ -306,11 +435,11 @@ pub fn filtered_normals(
                 let t = Instant::now();
                 buf.clear();
                 buf.resize((end - start) * grid_len, 0.0);
-                let frames = voxelizer.voxelize_batch_yaw(
-                    &faces[start..end],
-                    yaws.map(|y| &y[start..end]),
-                    &mut buf,
-                );
+                let batch_faces = &faces[start..end];
+                let batch_yaws: Option<Vec<f64>> =
+                    yaws.map(|y| batch_faces.iter().map(|&f| y[f as usize]).collect());
+                let frames =
+                    voxelizer.voxelize_batch_yaw(batch_faces, batch_yaws.as_deref(), &mut buf);
                 let dt = t.elapsed().as_secs_f64();
                 if full_tx.send((start, buf, frames, dt)).is_err() {
                     return;
@@ -329,7 +458,7 @@ pub fn filtered_normals(
                 })?;
             empty_tx.send(buf).ok();
             for (i, frame) in frames.iter().enumerate() {
-                let f = start + i;
+                let f = faces[start + i] as usize;
                 let o = &out[i * NUM_OUTPUTS + 3 * slot..i * NUM_OUTPUTS + 3 * slot + 3];
                 let mut local = [o[0] as f64, o[1] as f64, o[2] as f64];
                 if residual {
@@ -352,7 +481,7 @@ pub fn filtered_normals(
         Ok(())
     });
     result?;
-    Ok((normals, times))
+    Ok(times)
 }
 
 #[cfg(test)]
@@ -581,5 +710,65 @@ mod tests {
         assert_eq!(run(1, 180.0), guided);
         // within 1e-9°: no face flat (random networks), the paper's form
         assert_eq!(run(1, 1e-9), paper);
+    }
+
+    #[test]
+    fn frozen_faces_keep_their_output_and_auto_stop_ends_the_run() {
+        let bundle = tiny_bundle();
+        let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+        let n = mesh.num_faces();
+        let run = |iterations: usize, freeze_deg: f64, auto_stop_deg: f64| {
+            let params = DenoiseParams {
+                iterations,
+                vertex_iterations: 2,
+                freeze_deg,
+                auto_stop_deg,
+                ..DenoiseParams::default()
+            };
+            denoise(&mesh, &bundle, &params, &NoProgress).unwrap()
+        };
+        // off: every face every iteration, the mean change is reported
+        let (exact, t) = run(4, 0.0, 0.0);
+        assert_eq!(t.iterations.len(), 4);
+        assert!(t.iterations.iter().all(|s| s.faces_evaluated == n));
+        assert_eq!(t.iterations[0].mean_change_deg, 0.0);
+        assert!(t.iterations[1..].iter().all(|s| s.mean_change_deg > 0.0));
+        assert_eq!(
+            t.iterations.iter().map(|s| s.network).collect::<Vec<_>>(),
+            [1, 2, 3, 4]
+        );
+        // a threshold no face meets changes nothing
+        assert_eq!(run(4, 1e-12, 0.0).0.positions, exact.positions);
+        // every face turns less than 180°: all freeze after iteration 2, and
+        // iterations 3 and 4 move the vertices towards iteration 2's normals
+        let (frozen, t) = run(4, 180.0, 0.0);
+        assert_eq!(
+            t.iterations
+                .iter()
+                .map(|s| s.faces_evaluated)
+                .collect::<Vec<_>>(),
+            [n, n, 0, 0]
+        );
+        assert_eq!(t.faces_processed, 2 * n);
+        assert_eq!(t.iterations[2].mean_change_deg, 0.0);
+        assert_ne!(frozen.positions, exact.positions);
+        // and the frozen run is deterministic
+        assert_eq!(run(4, 180.0, 0.0).0.positions, frozen.positions);
+        // auto stop: any change is below 180°, so the run ends after 2
+        let (stopped, t) = run(10, 0.0, 180.0);
+        assert_eq!(t.iterations.len(), 2);
+        assert_eq!(stopped.positions, run(2, 0.0, 0.0).0.positions);
+        // bad thresholds are refused, naming the field
+        for (f, a, name) in [(-1.0, 0.0, "freeze_deg"), (0.0, f64::NAN, "auto_stop_deg")] {
+            let params = DenoiseParams {
+                freeze_deg: f,
+                auto_stop_deg: a,
+                ..DenoiseParams::default()
+            };
+            assert!(matches!(
+                params.validate(),
+                Err(NetError::InvalidParameter { name: n, .. }) if n == name
+            ));
+        }
     }
 }
