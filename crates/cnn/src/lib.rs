@@ -23,6 +23,6 @@ mod train;
 mod weights;
 
 pub use error::CnnError;
-pub use network::Cnn;
+pub use network::{Cnn, LayerTimes};
 pub use train::{AdamConfig, Loss, Trainer};
 pub use weights::{BatchNormWeights, BlockWeights, ConvWeights, LinearWeights, NetWeights};

@@ -223,6 +223,7 @@ impl Cnn {
             &mut s,
             &mut out,
             Some(&mut background),
+            None,
         );
         cnn.background = background;
         Ok(cnn)
@@ -277,7 +278,7 @@ impl Cnn {
             .for_each(|(grids, out)| {
                 let mut s = self.scratch();
                 for (grid, o) in grids.chunks_exact(g).zip(out.chunks_exact_mut(no)) {
-                    self.run(grid, &mut s, o, None);
+                    self.run(grid, &mut s, o, None, None);
                 }
             });
         Ok(())
@@ -307,10 +308,21 @@ impl Cnn {
         s: &mut Scratch,
         out: &mut [f32],
         mut record: Option<&mut Background>,
+        mut profile: Option<&mut LayerTimes>,
     ) {
         let lv = self.level;
         let sparse = record.is_none();
+        let mut clock = std::time::Instant::now();
+        let mut lap = |slot: usize, profile: &mut Option<&mut LayerTimes>| {
+            if let Some(p) = profile.as_deref_mut() {
+                let now = std::time::Instant::now();
+                let last = p.seconds.len() - 1;
+                p.seconds[slot.min(last)] += (now - clock).as_secs_f64();
+                clock = now;
+            }
+        };
         s.occupied.gather(grid, 3);
+        lap(0, &mut profile);
         let mut n = self.stem_side;
         let mut c = self.stem.cout;
         self.stem
@@ -318,6 +330,7 @@ impl Cnn {
         if sparse {
             self.stem.reach_mask(&s.occupied, self.grid, &mut s.near);
         }
+        lap(1, &mut profile);
         for (bi, b) in self.blocks.iter().enumerate() {
             let (m, co) = (b.m, b.a.cout);
             let x = &s.x[..n * n * n * c];
@@ -332,8 +345,10 @@ impl Cnn {
                 }
                 let (near_a, near_y) = (&s.near_a, &s.near_y);
                 let only = |mask, background| Some(Region { mask, background });
+                lap(2 + 3 * bi, &mut profile);
                 b.shortcut
                     .run(lv, x, n, y, false, false, only(near_y, None));
+                lap(2 + 3 * bi, &mut profile);
                 b.a.run(
                     lv,
                     x,
@@ -343,6 +358,7 @@ impl Cnn {
                     true,
                     only(near_a, Some(&self.background.a[bi])),
                 );
+                lap(3 + 3 * bi, &mut profile);
                 b.b.run(
                     lv,
                     t,
@@ -352,6 +368,7 @@ impl Cnn {
                     true,
                     only(near_y, Some(&self.background.y[bi])),
                 );
+                lap(4 + 3 * bi, &mut profile);
                 std::mem::swap(&mut s.near, &mut s.near_y);
             } else {
                 b.shortcut.run(lv, x, n, y, false, false, None);
@@ -389,5 +406,72 @@ impl Cnn {
         for v in out.iter_mut() {
             *v = v.tanh();
         }
+        lap(usize::MAX, &mut profile);
+    }
+
+    /// [`Self::forward`] on one thread with a clock around every layer: the
+    /// seconds spent per layer over the batch (see [`LayerTimes::names`]).
+    ///
+    /// # Errors
+    /// As [`Self::forward`].
+    pub fn forward_profiled(&self, grids: &[f32], out: &mut [f32]) -> Result<LayerTimes, CnnError> {
+        let g = self.grid_len();
+        let no = self.outputs();
+        if !grids.len().is_multiple_of(g) || out.len() != grids.len() / g * no {
+            return Err(CnnError::BufferSize {
+                what: "output batch",
+                actual: out.len(),
+                expected: grids.len() / g * no,
+            });
+        }
+        let mut times = LayerTimes {
+            seconds: vec![0.0; 3 + 3 * self.blocks.len()],
+            blocks: self.blocks.len(),
+        };
+        let mut s = self.scratch();
+        for (grid, o) in grids.chunks_exact(g).zip(out.chunks_exact_mut(no)) {
+            self.run(grid, &mut s, o, None, Some(&mut times));
+        }
+        Ok(times)
+    }
+}
+
+/// Seconds per layer of [`Cnn::forward_profiled`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayerTimes {
+    /// indexed like [`LayerTimes::names`]
+    pub seconds: Vec<f64>,
+    blocks: usize,
+}
+
+impl LayerTimes {
+    /// `(layer, seconds)` in network order: gathering the occupied voxels,
+    /// the stem, per block the shortcut (with the masks of the cubes to
+    /// compute) and the two 3³ convolutions, then the head.
+    pub fn named(&self) -> Vec<(String, f64)> {
+        let mut v = vec![
+            ("gather occupied voxels".to_string(), self.seconds[0]),
+            ("stem 5³ conv (scatter)".to_string(), self.seconds[1]),
+        ];
+        for b in 0..self.blocks {
+            v.push((
+                format!("block {} shortcut 1³ + masks", b + 1),
+                self.seconds[2 + 3 * b],
+            ));
+            v.push((
+                format!("block {} conv a 3³", b + 1),
+                self.seconds[3 + 3 * b],
+            ));
+            v.push((
+                format!("block {} conv b 3³", b + 1),
+                self.seconds[4 + 3 * b],
+            ));
+        }
+        let last = self.seconds.len() - 1;
+        v.push((
+            "max pool + fully connected + tanh".to_string(),
+            self.seconds[last],
+        ));
+        v
     }
 }

@@ -91,3 +91,24 @@ fn isolated_voxels_at_the_borders_match_reference() {
         );
     }
 }
+
+#[test]
+fn the_profiled_forward_gives_the_same_outputs_and_times_every_layer() {
+    let w = common::random_net(4, 21, [16, 32, 64]);
+    let cnn = Cnn::new(&w).unwrap();
+    let grids: Vec<f32> = (0..3).flat_map(|i| common::sheet_grid(i, 21)).collect();
+    let (mut a, mut b) = (vec![0.0f32; 3 * 18], vec![0.0f32; 3 * 18]);
+    cnn.forward(&grids, &mut a).unwrap();
+    let times = cnn.forward_profiled(&grids, &mut b).unwrap();
+    assert_eq!(a, b);
+    let named = times.named();
+    // gather, stem, three per block, head
+    assert_eq!(named.len() % 3, 0);
+    assert!(named.len() >= 6);
+    assert!(named.iter().all(|(_, s)| *s >= 0.0));
+    assert!(named.iter().map(|(_, s)| s).sum::<f64>() > 0.0);
+    assert!(matches!(
+        cnn.forward_profiled(&grids[1..], &mut b),
+        Err(CnnError::BufferSize { .. })
+    ));
+}

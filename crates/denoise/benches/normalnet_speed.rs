@@ -82,6 +82,21 @@ fn one_pass(name: &str, mesh: &Mesh, bundle: &Bundle) {
             .expect("forward");
         cnn_s += t.elapsed().as_secs_f64();
     }
+    // per layer, one thread, on the first 512 faces' grids
+    let first: Vec<u32> = faces.iter().copied().take(512).collect();
+    let mut grids = vec![0.0f32; first.len() * grid_len];
+    voxelizer.voxelize_batch(&first, &mut grids);
+    let mut out = vec![0.0f32; first.len() * NUM_OUTPUTS];
+    let layers = net.forward_profiled(&grids, &mut out).expect("profile");
+    let per_sample: Vec<Value> = layers
+        .named()
+        .into_iter()
+        .map(|(layer, s)| json!({"layer": layer, "us_per_sample": 1e6 * s / first.len() as f64}))
+        .collect();
+    println!(
+        "{}",
+        json!({"bench": "cnn_layers_one_thread", "mesh": name, "layers": per_sample})
+    );
     println!(
         "{}",
         json!({

@@ -2,9 +2,11 @@
 //! under `/usr/bin/time -v`).
 //!
 //! `cargo run --release -p normalnet-denoise --example large -- gnf 500`
-//! (`rings` R gives 4·R² faces: 500 → 1.0M).
+//! (`rings` R gives 4·R² faces: 500 → 1.0M); further arguments `KEY=VALUE`
+//! set the method's parameters (JSON values), e.g.
+//! `-- normalnet 500 iterations=1 vertex_iterations=5`.
 
-use normalnet_denoise::Denoiser;
+use normalnet_denoise::{Denoiser, Params};
 use normalnet_mesh::{Mesh, NoProgress};
 use std::time::Instant;
 
@@ -47,8 +49,14 @@ fn main() {
         .next()
         .map(|s| s.parse().expect("rings"))
         .unwrap_or(500);
+    let mut params = Params::new();
+    for kv in args {
+        let (k, v) = kv.split_once('=').expect("parameters are KEY=VALUE");
+        let v = serde_json::from_str(v).unwrap_or_else(|_| serde_json::Value::String(v.into()));
+        params.insert(k.into(), v);
+    }
     let mesh = torus(rings);
-    let method = Denoiser::with_defaults(&name).expect("method");
+    let method = Denoiser::new(&name, &params).expect("method");
     let t = Instant::now();
     let out = method.denoise(&mesh, None, &NoProgress).expect("denoise");
     println!(
