@@ -32,6 +32,7 @@ pub const INFO: MethodInfo = MethodInfo {
         ("model", "model"),
         ("guided-from", "guided_from"),
         ("no-fold-guard", "fold_guard"),
+        ("auto-stop", "auto_stop_deg"),
     ],
     defaults: defaults_of::<NormalnetParams>,
     build,
@@ -73,7 +74,8 @@ pub struct NormalnetParams {
     /// (0 = off: every face every iteration)
     pub freeze_deg: f64,
     /// stop after an iteration whose outputs turned less than this many
-    /// degrees on average (`iterations` is then the most; 0 = off)
+    /// degrees on average (`iterations` is then the most; 0 = off: the
+    /// paper's pipeline; default 1.0, see `DenoiseParams::auto_stop_deg`)
     pub auto_stop_deg: f64,
 }
 

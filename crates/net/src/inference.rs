@@ -70,7 +70,11 @@ pub struct DenoiseParams {
     /// The run stops by itself after an iteration whose outputs turned, on
     /// average over all faces, less than this many degrees from the
     /// previous iteration's (`iterations` is then the most it runs;
-    /// 0 = off, always `iterations`).
+    /// 0 = off, always `iterations`: the paper's pipeline). Default 1.0:
+    /// on the validation set (8 held-out meshes) it gave a mean E_a of
+    /// 7.75° against 7.87° for the full 10 iterations, in 60 iterations
+    /// instead of 80 (organic meshes gain, over-smoothed by late
+    /// iterations; CAD shapes lose up to 0.4°).
     pub auto_stop_deg: f64,
 }
 
@@ -87,7 +91,7 @@ impl Default for DenoiseParams {
             guided_flat_frac: 0.5,
             fold_guard: Some(FOLD_GUARD_COS),
             freeze_deg: 0.0,
-            auto_stop_deg: 0.0,
+            auto_stop_deg: 1.0,
         }
     }
 }
@@ -665,6 +669,7 @@ mod tests {
             iterations: 11,
             vertex_iterations: 2,
             batch: 50,
+            auto_stop_deg: 0.0,
             ..DenoiseParams::default()
         };
         let (out, times) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();

@@ -73,8 +73,13 @@ pub struct MethodArgs {
           value_parser = clap::builder::PossibleValuesParser::new(method_names()))]
     pub method: String,
     /// N_f.
-    #[arg(long, help = flag_help("iterations", "Normal-filtering iterations N_f"))]
+    #[arg(long, help = flag_help("iterations",
+        "Normal-filtering iterations N_f (normalnet: the most, see --auto-stop)"))]
     pub iterations: Option<usize>,
+    /// NormalNet's auto stop.
+    #[arg(long, help = flag_help("auto-stop",
+        "NormalNet stops after an iteration whose normals turned less than this many degrees on average (0: always N_f iterations, the paper's pipeline)"))]
+    pub auto_stop: Option<f64>,
     /// N_v.
     #[arg(long, help = flag_help("vertex-iterations",
         "Vertex-update passes N_v (per iteration; bnf/sun07: after all normal passes)"))]
@@ -189,8 +194,9 @@ pub struct Args {
 pub fn given_params(args: &MethodArgs, info: &MethodInfo) -> anyhow::Result<Params> {
     let num = |v: Option<f64>| v.map(Value::from);
     let int = |v: Option<usize>| v.map(Value::from);
-    let given: [(&str, Option<Value>); 19] = [
+    let given: [(&str, Option<Value>); 20] = [
         ("iterations", int(args.iterations)),
+        ("auto-stop", num(args.auto_stop)),
         ("vertex-iterations", int(args.vertex_iterations)),
         ("mu-g", num(args.mu_g)),
         ("sigma-s", num(args.sigma_s)),
