@@ -258,15 +258,8 @@ impl Cnn {
     /// [`CnnError::BufferSize`] when the buffers do not hold whole samples of
     /// the same batch size.
     pub fn forward(&self, grids: &[f32], out: &mut [f32]) -> Result<(), CnnError> {
-        let g = self.grid_len();
-        let no = self.outputs();
-        if !grids.len().is_multiple_of(g) || out.len() != grids.len() / g * no {
-            return Err(CnnError::BufferSize {
-                what: "output batch",
-                actual: out.len(),
-                expected: grids.len() / g * no,
-            });
-        }
+        self.check_buffers(grids, out)?;
+        let (g, no) = (self.grid_len(), self.outputs());
         // One contiguous run of samples per thread, so each thread allocates
         // its buffers once per call (rayon's `for_each_init` would do it per
         // split job).
@@ -281,6 +274,19 @@ impl Cnn {
                     self.run(grid, &mut s, o, None, None);
                 }
             });
+        Ok(())
+    }
+
+    /// `grids` holds whole samples and `out` one output row for each.
+    fn check_buffers(&self, grids: &[f32], out: &[f32]) -> Result<(), CnnError> {
+        let (g, no) = (self.grid_len(), self.outputs());
+        if !grids.len().is_multiple_of(g) || out.len() != grids.len() / g * no {
+            return Err(CnnError::BufferSize {
+                what: "output batch",
+                actual: out.len(),
+                expected: grids.len() / g * no,
+            });
+        }
         Ok(())
     }
 
@@ -415,15 +421,8 @@ impl Cnn {
     /// # Errors
     /// As [`Self::forward`].
     pub fn forward_profiled(&self, grids: &[f32], out: &mut [f32]) -> Result<LayerTimes, CnnError> {
-        let g = self.grid_len();
-        let no = self.outputs();
-        if !grids.len().is_multiple_of(g) || out.len() != grids.len() / g * no {
-            return Err(CnnError::BufferSize {
-                what: "output batch",
-                actual: out.len(),
-                expected: grids.len() / g * no,
-            });
-        }
+        self.check_buffers(grids, out)?;
+        let (g, no) = (self.grid_len(), self.outputs());
         let mut times = LayerTimes {
             seconds: vec![0.0; 3 + 3 * self.blocks.len()],
             blocks: self.blocks.len(),

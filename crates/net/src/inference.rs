@@ -234,6 +234,7 @@ pub fn denoise(
             slot,
             params.batch,
             &active,
+            None,
             &mut normals,
             progress,
         )?;
@@ -345,7 +346,7 @@ pub fn filtered_normals(
 ) -> Result<(Vec<Vec3>, StageTimes), NetError> {
     let mut normals = vec![[0.0; 3]; mesh.num_faces()];
     let faces: Vec<u32> = (0..mesh.num_faces() as u32).collect();
-    let times = filtered_normals_impl(
+    let times = filtered_normals_of(
         mesh,
         topology,
         cnn,
@@ -362,32 +363,13 @@ pub fn filtered_normals(
 }
 
 /// [`filtered_normals`] of the listed `faces` only, written into their
-/// entries of `normals` (len #F; the other entries are left as they are).
-/// No yaw. Returns the stage times.
+/// entries of `normals` (len #F; the other entries are left as they are);
+/// `yaws`, when given, is indexed by face. Returns the stage times.
 ///
 /// # Errors
 /// As [`filtered_normals`].
 #[allow(clippy::too_many_arguments)]
 pub fn filtered_normals_of(
-    mesh: &Mesh,
-    topology: &Topology,
-    cnn: &Cnn,
-    residual: bool,
-    voxel: VoxelParams,
-    slot: usize,
-    batch: usize,
-    faces: &[u32],
-    normals: &mut [Vec3],
-    progress: &dyn Progress,
-) -> Result<StageTimes, NetError> {
-    filtered_normals_impl(
-        mesh, topology, cnn, residual, voxel, slot, batch, faces, None, normals, progress,
-    )
-}
-
-/// `yaws` is indexed by face.
-#[allow(clippy::too_many_arguments)]
-fn filtered_normals_impl(
     mesh: &Mesh,
     topology: &Topology,
     cnn: &Cnn,
