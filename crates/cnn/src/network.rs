@@ -416,7 +416,7 @@ impl Cnn {
     }
 
     /// [`Self::forward`] on one thread with a clock around every layer: the
-    /// seconds spent per layer over the batch (see [`LayerTimes::names`]).
+    /// seconds spent per layer over the batch (see [`LayerTimes::named`]).
     ///
     /// # Errors
     /// As [`Self::forward`].
@@ -438,7 +438,7 @@ impl Cnn {
 /// Seconds per layer of [`Cnn::forward_profiled`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct LayerTimes {
-    /// indexed like [`LayerTimes::names`]
+    /// indexed like [`LayerTimes::named`]
     pub seconds: Vec<f64>,
     blocks: usize,
 }
