@@ -33,6 +33,7 @@ pub const INFO: MethodInfo = MethodInfo {
         ("guided-from", "guided_from"),
         ("no-fold-guard", "fold_guard"),
         ("auto-stop", "auto_stop_deg"),
+        ("no-switch", "switch"),
     ],
     defaults: defaults_of::<NormalnetParams>,
     build,
@@ -77,6 +78,11 @@ pub struct NormalnetParams {
     /// degrees on average (`iterations` is then the most; 0 = off: the
     /// paper's pipeline; default 1.0, see `DenoiseParams::auto_stop_deg`)
     pub auto_stop_deg: f64,
+    /// the bundle's learned switch between the network's output, the
+    /// guided pass, a GNF pass and the current normal, per face (on; false
+    /// or a bundle without one: the paper's form; see
+    /// `normalnet_net::switch`)
+    pub switch: bool,
 }
 
 impl Default for NormalnetParams {
@@ -96,6 +102,7 @@ impl Default for NormalnetParams {
             fold_guard_cos: d.fold_guard.unwrap_or(FOLD_GUARD_COS),
             freeze_deg: d.freeze_deg,
             auto_stop_deg: d.auto_stop_deg,
+            switch: d.switch,
         }
     }
 }
@@ -114,6 +121,7 @@ impl NormalnetParams {
             fold_guard: self.fold_guard.then_some(self.fold_guard_cos),
             freeze_deg: self.freeze_deg,
             auto_stop_deg: self.auto_stop_deg,
+            switch: self.switch,
             ..DenoiseParams::default()
         }
     }

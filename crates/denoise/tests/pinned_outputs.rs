@@ -85,9 +85,11 @@ fn outputs_are_those_of_the_program_before_the_move() {
         let out = d.denoise(&noisy, Some(&clean), &NoProgress).unwrap();
         assert_eq!(fnv(&out), *expected, "{name}: {:#018x}", fnv(&out));
     }
-    // the exact pipeline of that commit: 10 iterations, no auto stop
+    // the exact pipeline of that commit: the paper's form, 10 iterations,
+    // no auto stop
     let mut exact = Params::new();
     exact.insert("auto_stop_deg".into(), 0.0.into());
+    exact.insert("switch".into(), false.into());
     let out = Denoiser::new("normalnet", &exact)
         .unwrap()
         .denoise(&noisy, None, &NoProgress)

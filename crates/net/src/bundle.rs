@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::NetError;
 use crate::arch::{MU_GS, ModelConfig};
+use crate::switch::SwitchWeights;
 
 /// First and last filtering iteration (1-based) of each network; `usize::MAX`
 /// stands for N_f (open end).
@@ -68,6 +69,10 @@ pub struct Manifest {
     pub training: TrainingInfo,
     /// one entry per network, in interval order
     pub networks: Vec<NetworkInfo>,
+    /// the learned switch between candidate normals (see
+    /// [`crate::switch`]); bundles without one run the paper's form
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub switch: Option<SwitchWeights>,
 }
 
 /// Training data and settings shared by the six networks.
@@ -182,6 +187,9 @@ impl Manifest {
                 self.intervals,
                 Manifest::default_intervals()
             )));
+        }
+        if let Some(switch) = &self.switch {
+            switch.validate().map_err(bad)?;
         }
         if self.networks.len() != INTERVALS.len() {
             return Err(bad(format!(
@@ -423,6 +431,7 @@ pub fn new_manifest(preset: &str) -> Result<Manifest, NetError> {
                 ..NetworkInfo::default()
             })
             .collect(),
+        switch: None,
     })
 }
 

@@ -24,6 +24,7 @@ use serde::Serialize;
 use crate::NetError;
 use crate::arch::NUM_OUTPUTS;
 use crate::bundle::{Bundle, network_for_iteration};
+use crate::switch;
 
 /// Settings of [`denoise`]; `Default` is SPEC §7.
 #[derive(Clone, Debug, PartialEq)]
@@ -74,8 +75,15 @@ pub struct DenoiseParams {
     /// on the validation set (8 held-out meshes) it gave a mean E_a of
     /// 7.75° against 7.87° for the full 10 iterations, in 60 iterations
     /// instead of 80 (organic meshes gain, over-smoothed by late
-    /// iterations; CAD shapes lose up to 0.4°).
+    /// iterations; CAD shapes lose up to 0.4°). With the learned switch the
+    /// run stops instead when the switch keeps most faces where they are
+    /// ([`switch::STAY_SHARE_TO_STOP`]); any value > 0 turns that on.
     pub auto_stop_deg: f64,
+    /// Use the bundle's learned switch (see [`crate::switch`]) when it has
+    /// one: each face's filtered normal blends the network's output, the
+    /// guided pass, a GNF pass and the current normal. false (or a bundle
+    /// without a switch): the paper's form (and `guided_from`).
+    pub switch: bool,
 }
 
 impl Default for DenoiseParams {
@@ -92,6 +100,7 @@ impl Default for DenoiseParams {
             fold_guard: Some(FOLD_GUARD_COS),
             freeze_deg: 0.0,
             auto_stop_deg: 1.0,
+            switch: true,
         }
     }
 }
@@ -218,6 +227,10 @@ pub fn denoise(
     // being filtered (`freeze_deg`)
     let mut previous: Option<Vec<Vec3>> = None;
     let mut frozen = vec![false; n];
+    let mut switch_says_stop = false;
+    let learned_switch = bundle.manifest.switch.as_ref().filter(|_| params.switch);
+    let mut switch_state =
+        learned_switch.map(|_| switch::SwitchState::new(mesh, &topology, params.mu_g));
     for k in 1..=params.iterations {
         let iteration_start = Instant::now();
         progress.message(&format!("iteration {k}/{}", params.iterations));
@@ -257,7 +270,14 @@ pub fn denoise(
         };
         previous = Some(normals.clone());
         let t = Instant::now();
-        let normals = if params.guided_from > 0 && k >= params.guided_from {
+        let normals = if let (Some(weights), Some(state)) = (learned_switch, switch_state.as_mut())
+        {
+            let candidates = state.candidates(&current, &topology, normals);
+            let features = switch::features(&topology, &candidates, k);
+            let (blended, stay) = switch::blend(weights, &candidates, &features);
+            switch_says_stop = stay as f64 >= switch::STAY_SHARE_TO_STOP * n as f64;
+            blended
+        } else if params.guided_from > 0 && k >= params.guided_from {
             let guided = gt_guided_normals(
                 &current,
                 &topology,
@@ -310,7 +330,12 @@ pub fn denoise(
             mean_change_deg,
             seconds: iteration_start.elapsed().as_secs_f64(),
         });
-        if k > 1 && mean_change_deg < params.auto_stop_deg {
+        let stop = if learned_switch.is_some() {
+            switch_says_stop
+        } else {
+            k > 1 && mean_change_deg < params.auto_stop_deg
+        };
+        if params.auto_stop_deg > 0.0 && stop {
             break;
         }
     }
@@ -671,6 +696,63 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn the_learned_switch_blends_candidates_and_is_optional() {
+        let mut bundle = tiny_bundle();
+        let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+        let run = |bundle: &Bundle, switch: bool| {
+            let params = DenoiseParams {
+                iterations: 2,
+                vertex_iterations: 3,
+                switch,
+                ..DenoiseParams::default()
+            };
+            denoise(&mesh, bundle, &params, &NoProgress)
+                .unwrap()
+                .0
+                .positions
+        };
+        let paper = run(&bundle, true);
+        // a switch that always takes the network's output is the paper's form
+        bundle.manifest.switch = Some(crate::switch::tests::constant(0));
+        let same = run(&bundle, true);
+        let largest = paper
+            .iter()
+            .zip(&same)
+            .map(|(a, b)| vec3::norm(vec3::sub(*a, *b)))
+            .fold(0.0, f64::max);
+        assert!(largest < 1e-9, "moved {largest}");
+        // switched off: exactly the paper's form
+        assert_eq!(run(&bundle, false), paper);
+        // always "stay": the vertices lie in their faces' planes and do not move
+        bundle.manifest.switch = Some(crate::switch::tests::constant(3));
+        let stay = run(&bundle, true);
+        let largest = mesh
+            .positions
+            .iter()
+            .zip(&stay)
+            .map(|(a, b)| vec3::norm(vec3::sub(*a, *b)))
+            .fold(0.0, f64::max);
+        assert!(largest < 1e-9, "moved {largest}");
+        // always the guided pass: the guided form
+        bundle.manifest.switch = Some(crate::switch::tests::constant(1));
+        let guided = DenoiseParams {
+            iterations: 2,
+            vertex_iterations: 3,
+            guided_from: 1,
+            switch: false,
+            ..DenoiseParams::default()
+        };
+        let guided = denoise(&mesh, &bundle, &guided, &NoProgress).unwrap().0;
+        let largest = guided
+            .positions
+            .iter()
+            .zip(&run(&bundle, true))
+            .map(|(a, b)| vec3::norm(vec3::sub(*a, *b)))
+            .fold(0.0, f64::max);
+        assert!(largest < 1e-9, "moved {largest}");
     }
 
     #[test]

@@ -30,6 +30,8 @@ pub mod model;
 pub mod plot;
 #[cfg(feature = "burn")]
 pub mod step;
+pub mod switch;
+pub mod switch_fit;
 pub mod training;
 pub mod weights_file;
 

@@ -100,6 +100,7 @@ fn the_fold_guard_folds_no_more_faces_on_the_example() {
         let params = normalnet_net::DenoiseParams {
             iterations: 4,
             auto_stop_deg: 0.0,
+            switch: false,
             fold_guard: fold_guard.then_some(normalnet_filters::FOLD_GUARD_COS),
             ..normalnet_net::DenoiseParams::default()
         };

@@ -160,6 +160,11 @@ pub struct MethodArgs {
     /// implementations and the paper's NormalNet pipeline.
     #[arg(long)]
     pub no_fold_guard: bool,
+    /// NormalNet: the paper's form instead of the bundle's learned switch
+    /// (which blends, per face, the network's normal, a pass guided by it,
+    /// a GNF pass and the current normal).
+    #[arg(long)]
+    pub no_switch: bool,
 }
 
 /// Arguments of `normalnet denoise`.
@@ -194,7 +199,7 @@ pub struct Args {
 pub fn given_params(args: &MethodArgs, info: &MethodInfo) -> anyhow::Result<Params> {
     let num = |v: Option<f64>| v.map(Value::from);
     let int = |v: Option<usize>| v.map(Value::from);
-    let given: [(&str, Option<Value>); 20] = [
+    let given: [(&str, Option<Value>); 21] = [
         ("iterations", int(args.iterations)),
         ("auto-stop", num(args.auto_stop)),
         ("vertex-iterations", int(args.vertex_iterations)),
@@ -224,6 +229,7 @@ pub fn given_params(args: &MethodArgs, info: &MethodInfo) -> anyhow::Result<Para
             "no-fold-guard",
             args.no_fold_guard.then_some(Value::Bool(false)),
         ),
+        ("no-switch", args.no_switch.then_some(Value::Bool(false))),
     ];
     let mut params = Params::new();
     for (flag, value) in given {

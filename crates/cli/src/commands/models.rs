@@ -97,6 +97,19 @@ pub fn describe(bundle: &Bundle) -> String {
             if n.residual { "residual" } else { "normal" }
         ));
     }
+    match &m.switch {
+        Some(w) => line(format!(
+            "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){}",
+            w.hidden,
+            normalnet_net::switch::CANDIDATES.join(", "),
+            if w.notes.is_empty() {
+                String::new()
+            } else {
+                format!("\n            {}", w.notes)
+            }
+        )),
+        None => line("switch      none (the paper's form)".into()),
+    }
     s
 }
 

@@ -1,0 +1,55 @@
+//! Fits the learned switch (`normalnet_net::switch_fit`) to rows dumped by
+//! `switch_trace` and writes a `[switch]` table to append to a bundle's
+//! `manifest.toml`.
+//!
+//! `cargo run --release -p normalnet-net --example switch_fit -- OUT.toml NOTES DATA.bin...`
+//! (env `HIDDEN`, `EPOCHS`, `SEED`).
+
+use normalnet_net::switch::{CANDIDATES, SwitchWeights};
+use normalnet_net::switch_fit::{FitParams, fit};
+
+#[derive(serde::Serialize)]
+struct Table {
+    switch: SwitchWeights,
+}
+
+fn env(name: &str, default: usize) -> usize {
+    std::env::var(name).map_or(default, |v| v.parse().expect(name))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let (out, notes, files) = (&args[1], &args[2], &args[3..]);
+    let mut rows = Vec::new();
+    for f in files {
+        let bytes = std::fs::read(f)?;
+        rows.extend(
+            bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        );
+    }
+    let params = FitParams {
+        hidden: env("HIDDEN", 32),
+        epochs: env("EPOCHS", 40),
+        seed: env("SEED", 1) as u64,
+        ..FitParams::default()
+    };
+    let t = std::time::Instant::now();
+    let (mut weights, report) = fit(&rows, &[0, 1, 2, 3], &params)?;
+    println!(
+        "{} rows, {:.0} s; mean angle per candidate {:?}: {:.3?}, per-row best {:.3}",
+        rows.len() / normalnet_net::switch_fit::ROW_LEN,
+        t.elapsed().as_secs_f64(),
+        CANDIDATES,
+        report.candidate_mean_deg,
+        report.best_mean_deg
+    );
+    println!("expected angle per epoch: {:.3?}", report.epoch_loss);
+    weights.notes = notes.clone();
+    std::fs::write(
+        out,
+        format!("\n{}", toml::to_string(&Table { switch: weights })?),
+    )?;
+    Ok(())
+}

@@ -1,0 +1,381 @@
+//! The learned switch (not in the paper; issue 10): in every filtering
+//! iteration each face gets four candidate filtered normals —
+//! 0. the network's output (the paper's form),
+//! 1. the guided form: one joint-bilateral pass over the current normals
+//!    with the network's outputs as guidance (range μ_g, spatial 2·d_s — the
+//!    oracle's pass with learned instead of ground-truth guidance),
+//! 2. one GNF pass over the current normals (GNF's own patch guidance),
+//! 3. the current normal (the face stays where it is),
+//!
+//! and a small perceptron ([`SwitchWeights`], a bundle's `[switch]` table)
+//! reads [`NUM_FEATURES`] rotation-invariant features of the face and its
+//! 1-ring and blends the candidates by its softmax weights. The network
+//! learns organic detail, the guided pass keeps CAD edges sharp, and
+//! "stay" stops the late iterations from over-smoothing: the switch is fitted
+//! so that the expected angle to the ground truth is smallest, on meshes
+//! that are neither validation nor test data.
+//!
+//! Features, in order (angles in radians): ∠(net, guided), ∠(net, GNF),
+//! ∠(guided, GNF), ∠(net, current); mean and largest ∠ between the face's
+//! network normal and its 1-ring's; mean ∠ between the face's current normal
+//! and its 1-ring's; largest 1-ring ∠ of the GNF normals; the iteration k;
+//! then three per-mesh values: the median of feature 6 (a noise level), the
+//! median of feature 4, and the fraction of faces whose feature 5 is below
+//! 10° (how much of the mesh is flat).
+
+use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_normals};
+use normalnet_filters::{Gnf, GnfParams, NormalFilter};
+use normalnet_mesh::vec3::{self, Vec3};
+use normalnet_mesh::{FaceGeometry, Mesh, Topology};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Features per face.
+pub const NUM_FEATURES: usize = 12;
+
+/// The candidates, in the switch's output order.
+pub const CANDIDATES: [&str; 4] = ["network", "guided", "gnf", "current"];
+
+/// Number of candidates.
+pub const NUM_CANDIDATES: usize = CANDIDATES.len();
+
+/// A perceptron with one tanh hidden layer: `softmax(W2·tanh(W1·z + b1) + b2)`
+/// with `z = (x − mean) / std`. Row-major: `w1` is hidden × features, `w2`
+/// candidates × hidden.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SwitchWeights {
+    /// hidden units
+    pub hidden: usize,
+    /// feature means (len [`NUM_FEATURES`])
+    pub mean: Vec<f64>,
+    /// feature standard deviations (len [`NUM_FEATURES`], positive)
+    pub std: Vec<f64>,
+    /// first layer weights (hidden × [`NUM_FEATURES`])
+    pub w1: Vec<f64>,
+    /// first layer biases (len hidden)
+    pub b1: Vec<f64>,
+    /// second layer weights ([`NUM_CANDIDATES`] × hidden)
+    pub w2: Vec<f64>,
+    /// second layer biases (len [`NUM_CANDIDATES`]; a very negative one
+    /// rules its candidate out)
+    pub b2: Vec<f64>,
+    /// how it was fitted, in words
+    #[serde(default)]
+    pub notes: String,
+}
+
+impl SwitchWeights {
+    /// Checks the shapes and that every number is finite (`b2` may hold
+    /// large negative values).
+    pub fn validate(&self) -> Result<(), String> {
+        let h = self.hidden;
+        let shapes = [
+            ("mean", self.mean.len(), NUM_FEATURES),
+            ("std", self.std.len(), NUM_FEATURES),
+            ("w1", self.w1.len(), h * NUM_FEATURES),
+            ("b1", self.b1.len(), h),
+            ("w2", self.w2.len(), NUM_CANDIDATES * h),
+            ("b2", self.b2.len(), NUM_CANDIDATES),
+        ];
+        if h == 0 {
+            return Err("switch: hidden = 0".into());
+        }
+        for (name, got, want) in shapes {
+            if got != want {
+                return Err(format!("switch: {name} has {got} values, expected {want}"));
+            }
+        }
+        let all = [
+            &self.mean, &self.std, &self.w1, &self.b1, &self.w2, &self.b2,
+        ];
+        if all.iter().any(|v| v.iter().any(|x| !x.is_finite())) {
+            return Err("switch: a weight is not finite".into());
+        }
+        if self.std.iter().any(|s| *s <= 0.0) {
+            return Err("switch: std must be positive".into());
+        }
+        Ok(())
+    }
+
+    /// The softmax weights of the candidates for one face's features.
+    pub fn probabilities(&self, x: &[f64; NUM_FEATURES]) -> [f64; NUM_CANDIDATES] {
+        let mut z = [0.0; NUM_FEATURES];
+        for (j, z) in z.iter_mut().enumerate() {
+            *z = (x[j] - self.mean[j]) / self.std[j];
+        }
+        let hidden: Vec<f64> = self
+            .w1
+            .chunks_exact(NUM_FEATURES)
+            .zip(&self.b1)
+            .map(|(w, b)| (dot(w, &z) + b).tanh())
+            .collect();
+        let mut logits = [0.0; NUM_CANDIDATES];
+        for ((l, w), b) in logits
+            .iter_mut()
+            .zip(self.w2.chunks_exact(self.hidden))
+            .zip(&self.b2)
+        {
+            *l = dot(w, &hidden) + b;
+        }
+        let max = logits.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mut sum = 0.0;
+        for l in &mut logits {
+            *l = (*l - max).exp();
+            sum += *l;
+        }
+        logits.map(|e| e / sum)
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| a * b).sum()
+}
+
+/// The four candidates of one iteration, one normal per face each.
+pub struct Candidates {
+    /// in [`CANDIDATES`] order
+    pub normals: [Vec<Vec3>; NUM_CANDIDATES],
+}
+
+/// What the switch needs across iterations: GNF's neighbourhood, built once
+/// on the input mesh (as GNF does).
+pub struct SwitchState {
+    gnf: Gnf,
+    mu_g: f64,
+}
+
+impl SwitchState {
+    /// Prepares the GNF pass for `mesh` (the input of the run).
+    pub fn new(mesh: &Mesh, topology: &Topology, mu_g: f64) -> SwitchState {
+        let params = GnfParams {
+            mu_g,
+            ..GnfParams::default()
+        };
+        // the only error is a parameter out of range; μ_g was validated
+        let gnf = Gnf::new(&params, mesh, topology).expect("GNF parameters validated");
+        SwitchState { gnf, mu_g }
+    }
+
+    /// The candidates for the current mesh given the network's outputs.
+    pub fn candidates(
+        &mut self,
+        current: &Mesh,
+        topology: &Topology,
+        net: Vec<Vec3>,
+    ) -> Candidates {
+        let guided = gt_guided_normals(current, topology, &net, &[self.mu_g], GT_GUIDED_SIGMA_S);
+        let geometry = FaceGeometry::new(current);
+        let mut gnf = vec![[0.0; 3]; current.num_faces()];
+        self.gnf
+            .pass(topology, &geometry, &geometry.normals, &mut gnf);
+        Candidates {
+            normals: [net, guided, gnf, geometry.normals],
+        }
+    }
+}
+
+/// Mean and largest angle between face `f`'s normal and its 1-ring's.
+fn ring_angles(topology: &Topology, normals: &[Vec3], f: usize) -> (f64, f64) {
+    let ring = topology.face_neighbours.row(f);
+    if ring.is_empty() {
+        return (0.0, 0.0);
+    }
+    let mut sum = 0.0;
+    let mut max: f64 = 0.0;
+    for &g in ring {
+        let a = vec3::angle(normals[f], normals[g as usize]);
+        sum += a;
+        max = max.max(a);
+    }
+    (sum / ring.len() as f64, max)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// The features of every face (see the module docs) in iteration `k`.
+pub fn features(topology: &Topology, c: &Candidates, k: usize) -> Vec<[f64; NUM_FEATURES]> {
+    let [net, guided, gnf, current] = &c.normals;
+    let mut rows: Vec<[f64; NUM_FEATURES]> = (0..net.len())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|f| {
+            let (net_mean, net_max) = ring_angles(topology, net, f);
+            let (current_mean, _) = ring_angles(topology, current, f);
+            let (_, gnf_max) = ring_angles(topology, gnf, f);
+            [
+                vec3::angle(net[f], guided[f]),
+                vec3::angle(net[f], gnf[f]),
+                vec3::angle(guided[f], gnf[f]),
+                vec3::angle(net[f], current[f]),
+                net_mean,
+                net_max,
+                current_mean,
+                gnf_max,
+                k as f64,
+                0.0,
+                0.0,
+                0.0,
+            ]
+        })
+        .collect();
+    let n = rows.len().max(1) as f64;
+    let noise_level = median(rows.iter().map(|r| r[6]).collect());
+    let net_flatness = median(rows.iter().map(|r| r[4]).collect());
+    let flat_share = rows.iter().filter(|r| r[5] < 10f64.to_radians()).count() as f64 / n;
+    for r in &mut rows {
+        r[9] = noise_level;
+        r[10] = net_flatness;
+        r[11] = flat_share;
+    }
+    rows
+}
+
+/// Index of the "stay" candidate (the current normal).
+pub const STAY: usize = 3;
+
+/// The run stops after an iteration in which at least this share of the
+/// faces gave "stay" the largest weight (with `auto_stop_deg > 0`): the
+/// switch says the mesh has converged. Chosen on the validation meshes:
+/// the organic ones reach it after 2–3 iterations, the CAD shapes, still
+/// sharpening, never within 10.
+pub const STAY_SHARE_TO_STOP: f64 = 0.95;
+
+/// The filtered normals: each face's candidates blended by the switch's
+/// weights (normalised; a zero sum keeps the current normal), and how many
+/// faces gave "stay" the largest weight.
+pub fn blend(
+    weights: &SwitchWeights,
+    c: &Candidates,
+    features: &[[f64; NUM_FEATURES]],
+) -> (Vec<Vec3>, usize) {
+    let blended: Vec<(Vec3, bool)> = features
+        .par_iter()
+        .enumerate()
+        .with_min_len(256)
+        .map(|(f, x)| {
+            let p = weights.probabilities(x);
+            let mut sum = [0.0; 3];
+            for (candidate, w) in c.normals.iter().zip(p) {
+                sum = vec3::add(sum, vec3::scale(candidate[f], w));
+            }
+            let n = vec3::normalize_or_zero(sum);
+            let stays = (0..NUM_CANDIDATES).all(|k| p[k] <= p[STAY]);
+            (if n == [0.0; 3] { c.normals[STAY][f] } else { n }, stays)
+        })
+        .collect();
+    let stay = blended.iter().filter(|b| b.1).count();
+    (blended.into_iter().map(|b| b.0).collect(), stay)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A switch that always picks candidate `c` (a constant perceptron).
+    pub(crate) fn constant(c: usize) -> SwitchWeights {
+        let mut b2 = vec![-1e9; NUM_CANDIDATES];
+        b2[c] = 0.0;
+        SwitchWeights {
+            hidden: 2,
+            mean: vec![0.0; NUM_FEATURES],
+            std: vec![1.0; NUM_FEATURES],
+            w1: vec![0.1; 2 * NUM_FEATURES],
+            b1: vec![0.0; 2],
+            w2: vec![0.0; 2 * NUM_CANDIDATES],
+            b2,
+            notes: String::new(),
+        }
+    }
+
+    #[test]
+    fn probabilities_are_a_softmax_of_the_perceptron() {
+        let mut w = constant(0);
+        w.b2 = vec![0.0, 1.0, 2.0, 3.0];
+        w.w2[0] = 1.0; // candidate 0 reads hidden unit 0
+        let x = [0.5; NUM_FEATURES];
+        let h0 = (0.1f64 * 0.5 * NUM_FEATURES as f64).tanh();
+        let logits = [h0, 1.0, 2.0, 3.0];
+        let sum: f64 = logits.iter().map(|l| l.exp()).sum();
+        let p = w.probabilities(&x);
+        for (p, l) in p.iter().zip(logits) {
+            assert!((p - l.exp() / sum).abs() < 1e-12);
+        }
+        assert!(constant(2).probabilities(&x)[2] > 1.0 - 1e-12);
+    }
+
+    #[test]
+    fn validate_names_the_bad_part() {
+        assert!(constant(1).validate().is_ok());
+        let mut w = constant(1);
+        w.w1.pop();
+        assert!(w.validate().unwrap_err().contains("w1"));
+        let mut w = constant(1);
+        w.mean[3] = f64::NAN;
+        assert!(w.validate().unwrap_err().contains("finite"));
+        let mut w = constant(1);
+        w.std[0] = 0.0;
+        assert!(w.validate().unwrap_err().contains("std"));
+    }
+
+    #[test]
+    fn features_see_agreement_and_the_mesh_wide_values() {
+        let mesh = normalnet_voxel::shapes::generate_seeded(3, 300).unwrap();
+        let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+        let current = normalnet_mesh::geometry::face_normals(&mesh);
+        let mut state = SwitchState::new(&mesh, &topology, 0.35);
+        // the network "outputs" the current normals
+        let c = state.candidates(&mesh, &topology, current.clone());
+        assert_eq!(c.normals[3], current);
+        let x = features(&topology, &c, 4);
+        assert_eq!(x.len(), mesh.num_faces());
+        for r in &x {
+            assert!(r[3] < 1e-7, "∠(net, current) with net = current");
+            assert_eq!(r[8], 4.0);
+            assert!(r.iter().all(|v| v.is_finite() && *v >= 0.0));
+            assert_eq!(r[9..], x[0][9..], "per-mesh values are shared");
+        }
+        // noise makes fewer 1-rings flat and raises the noise level
+        let l = normalnet_mesh::geometry::mean_edge_length(&mesh, &topology);
+        let noisy = mesh.with_positions(
+            mesh.positions
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let s = ((i * 7919 % 13) as f64 / 6.0 - 1.0) * 0.2 * l;
+                    [p[0] + s, p[1] - s, p[2] + 0.5 * s]
+                })
+                .collect(),
+        );
+        let noisy_normals = normalnet_mesh::geometry::face_normals(&noisy);
+        let cn = state.candidates(&noisy, &topology, noisy_normals);
+        let xn = features(&topology, &cn, 4);
+        assert!(
+            xn[0][11] < x[0][11],
+            "flat share {} vs {}",
+            xn[0][11],
+            x[0][11]
+        );
+        assert!(
+            xn[0][9] > x[0][9],
+            "noise level {} vs {}",
+            xn[0][9],
+            x[0][9]
+        );
+        // a constant switch blends to its candidate
+        for k in 0..NUM_CANDIDATES {
+            let (b, stay) = blend(&constant(k), &c, &x);
+            assert_eq!(stay, if k == STAY { x.len() } else { 0 });
+            for (a, e) in b.iter().zip(&c.normals[k]) {
+                if *e != [0.0; 3] {
+                    assert!(vec3::angle(*a, *e) < 1e-9);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,380 @@
+//! Fitting the learned switch ([`crate::switch`]): from rows of face
+//! features and the four candidates' angles to the ground truth (collected
+//! by running the pipeline on training pairs, see
+//! `examples/switch_trace.rs`), a one-hidden-layer perceptron whose softmax
+//! minimises the expected angle `Σ_c p_c · e_c` (degrees), by Adam over
+//! shuffled mini-batches. Deterministic for a seed; parallel over the
+//! batch with a fixed reduction order, so the result does not depend on the
+//! thread count.
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::switch::{NUM_CANDIDATES, NUM_FEATURES, SwitchWeights};
+
+/// One training row: features, then each candidate's angle to the ground
+/// truth in radians (the layout of the dump files).
+pub const ROW_LEN: usize = NUM_FEATURES + NUM_CANDIDATES;
+
+/// Settings of [`fit`].
+#[derive(Clone, Debug)]
+pub struct FitParams {
+    /// hidden units (32)
+    pub hidden: usize,
+    /// passes over the rows (40)
+    pub epochs: usize,
+    /// rows per Adam step (4096)
+    pub batch: usize,
+    /// Adam's step size (3e-3)
+    pub learning_rate: f64,
+    /// shuffling and initialisation
+    pub seed: u64,
+}
+
+impl Default for FitParams {
+    fn default() -> Self {
+        FitParams {
+            hidden: 32,
+            epochs: 40,
+            batch: 4096,
+            learning_rate: 3e-3,
+            seed: 1,
+        }
+    }
+}
+
+/// The parameters as one flat vector: w1, b1, w2, b2.
+struct Layout {
+    h: usize,
+}
+
+impl Layout {
+    fn len(&self) -> usize {
+        self.h * NUM_FEATURES + self.h + NUM_CANDIDATES * self.h + NUM_CANDIDATES
+    }
+    fn split<'a>(&self, p: &'a [f64]) -> (&'a [f64], &'a [f64], &'a [f64], &'a [f64]) {
+        let (w1, rest) = p.split_at(self.h * NUM_FEATURES);
+        let (b1, rest) = rest.split_at(self.h);
+        let (w2, b2) = rest.split_at(NUM_CANDIDATES * self.h);
+        (w1, b1, w2, b2)
+    }
+}
+
+/// Expected error (degrees) of one row and, when `grad` is given, its
+/// gradient added into `grad`.
+fn row_loss(layout: &Layout, p: &[f64], z: &[f64], e_deg: &[f64], grad: Option<&mut [f64]>) -> f64 {
+    let h = layout.h;
+    let (w1, b1, w2, b2) = layout.split(p);
+    let hidden: Vec<f64> = w1
+        .chunks_exact(NUM_FEATURES)
+        .zip(b1)
+        .map(|(w, b)| (w.iter().zip(z).map(|(a, b)| a * b).sum::<f64>() + b).tanh())
+        .collect();
+    let mut logits = [0.0; NUM_CANDIDATES];
+    for (c, l) in logits.iter_mut().enumerate() {
+        *l = b2[c]
+            + w2[c * h..(c + 1) * h]
+                .iter()
+                .zip(&hidden)
+                .map(|(a, b)| a * b)
+                .sum::<f64>();
+    }
+    let max = logits.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut prob = logits.map(|l| (l - max).exp());
+    let sum: f64 = prob.iter().sum();
+    prob.iter_mut().for_each(|q| *q /= sum);
+    let loss: f64 = prob.iter().zip(e_deg).map(|(q, e)| q * e).sum();
+    if let Some(g) = grad {
+        let (gw1, rest) = g.split_at_mut(h * NUM_FEATURES);
+        let (gb1, rest) = rest.split_at_mut(h);
+        let (gw2, gb2) = rest.split_at_mut(NUM_CANDIDATES * h);
+        let mut dhidden = vec![0.0; h];
+        for c in 0..NUM_CANDIDATES {
+            let dl = prob[c] * (e_deg[c] - loss);
+            gb2[c] += dl;
+            for j in 0..h {
+                gw2[c * h + j] += dl * hidden[j];
+                dhidden[j] += dl * w2[c * h + j];
+            }
+        }
+        for j in 0..h {
+            let da = dhidden[j] * (1.0 - hidden[j] * hidden[j]);
+            gb1[j] += da;
+            for (g, x) in gw1[j * NUM_FEATURES..(j + 1) * NUM_FEATURES]
+                .iter_mut()
+                .zip(z)
+            {
+                *g += da * x;
+            }
+        }
+    }
+    loss
+}
+
+/// What [`fit`] reports besides the weights.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitReport {
+    /// mean expected error (degrees) after each epoch, on all rows
+    pub epoch_loss: Vec<f64>,
+    /// mean angle (degrees) of each candidate alone, and of the best per row
+    pub candidate_mean_deg: [f64; NUM_CANDIDATES],
+    /// mean angle (degrees) of the per-row best candidate (the ceiling)
+    pub best_mean_deg: f64,
+}
+
+/// Fits a switch to `rows` (each [`ROW_LEN`] values). `allowed` lists the
+/// candidates it may choose (the others get a bias of −10⁹).
+///
+/// # Errors
+/// No rows, a row of the wrong length, non-finite values, or an empty
+/// `allowed`.
+pub fn fit(
+    rows: &[f32],
+    allowed: &[usize],
+    params: &FitParams,
+) -> Result<(SwitchWeights, FitReport), String> {
+    if rows.is_empty() || !rows.len().is_multiple_of(ROW_LEN) {
+        return Err(format!(
+            "{} values do not make rows of {ROW_LEN}",
+            rows.len()
+        ));
+    }
+    if rows.iter().any(|x| !x.is_finite()) {
+        return Err("a row holds a non-finite value".into());
+    }
+    if allowed.is_empty() || allowed.iter().any(|&c| c >= NUM_CANDIDATES) {
+        return Err(format!("allowed candidates {allowed:?}"));
+    }
+    let n = rows.len() / ROW_LEN;
+    let row = |i: usize| &rows[i * ROW_LEN..(i + 1) * ROW_LEN];
+    // feature standardisation
+    let mut mean = vec![0.0; NUM_FEATURES];
+    let mut var = [0.0; NUM_FEATURES];
+    for i in 0..n {
+        for (m, x) in mean.iter_mut().zip(row(i)) {
+            *m += f64::from(*x) / n as f64;
+        }
+    }
+    for i in 0..n {
+        for ((v, m), x) in var.iter_mut().zip(&mean).zip(row(i)) {
+            *v += (f64::from(*x) - m).powi(2) / n as f64;
+        }
+    }
+    // a (nearly) constant feature is left unscaled rather than blown up
+    let std: Vec<f64> = var
+        .iter()
+        .map(|v| if v.sqrt() < 1e-6 { 1.0 } else { v.sqrt() })
+        .collect();
+    let z: Vec<f64> = (0..n)
+        .flat_map(|i| {
+            let r = row(i);
+            (0..NUM_FEATURES).map(move |j| f64::from(r[j]))
+        })
+        .enumerate()
+        .map(|(k, x)| (x - mean[k % NUM_FEATURES]) / std[k % NUM_FEATURES])
+        .collect();
+    let e: Vec<f64> = (0..n)
+        .flat_map(|i| {
+            row(i)[NUM_FEATURES..]
+                .iter()
+                .map(|x| f64::from(*x).to_degrees())
+        })
+        .collect();
+    let mut mask = [-1e9; NUM_CANDIDATES];
+    for &c in allowed {
+        mask[c] = 0.0;
+    }
+    let mut candidate_mean_deg = [0.0; NUM_CANDIDATES];
+    let mut best = 0.0;
+    for i in 0..n {
+        let ei = &e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES];
+        for (m, x) in candidate_mean_deg.iter_mut().zip(ei) {
+            *m += x / n as f64;
+        }
+        best += allowed.iter().map(|&c| ei[c]).fold(f64::INFINITY, f64::min) / n as f64;
+    }
+
+    let h = params.hidden.max(1);
+    let layout = Layout { h };
+    let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+    let mut p = vec![0.0; layout.len()];
+    {
+        use rand::Rng;
+        let s1 = 1.0 / (NUM_FEATURES as f64).sqrt();
+        let s2 = 1.0 / (h as f64).sqrt();
+        for x in &mut p[..h * NUM_FEATURES] {
+            *x = rng.random_range(-s1..s1);
+        }
+        let w2_start = h * NUM_FEATURES + h;
+        for x in &mut p[w2_start..w2_start + NUM_CANDIDATES * h] {
+            *x = rng.random_range(-s2..s2);
+        }
+    }
+    let b2_start = layout.len() - NUM_CANDIDATES;
+    for (b, m) in p[b2_start..].iter_mut().zip(mask) {
+        *b += m;
+    }
+    let (beta1, beta2, eps): (f64, f64, f64) = (0.9, 0.999, 1e-8);
+    let mut m1 = vec![0.0; p.len()];
+    let mut m2 = vec![0.0; p.len()];
+    let mut t = 0;
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut epoch_loss = Vec::with_capacity(params.epochs);
+    let batch = params.batch.max(1);
+    // fixed chunks so that the sum order does not depend on the threads
+    const CHUNK: usize = 256;
+    for _ in 0..params.epochs {
+        order.shuffle(&mut rng);
+        for idx in order.chunks(batch) {
+            let grads: Vec<Vec<f64>> = idx
+                .par_chunks(CHUNK)
+                .map(|part| {
+                    let mut g = vec![0.0; p.len()];
+                    for &i in part {
+                        row_loss(
+                            &layout,
+                            &p,
+                            &z[i * NUM_FEATURES..(i + 1) * NUM_FEATURES],
+                            &e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES],
+                            Some(&mut g),
+                        );
+                    }
+                    g
+                })
+                .collect();
+            let mut g = vec![0.0; p.len()];
+            for part in &grads {
+                for (a, b) in g.iter_mut().zip(part) {
+                    *a += b / idx.len() as f64;
+                }
+            }
+            // the masked biases stay where they are
+            for c in 0..NUM_CANDIDATES {
+                if mask[c] != 0.0 {
+                    g[b2_start + c] = 0.0;
+                }
+            }
+            t += 1;
+            let lr = params.learning_rate * (1.0 - beta2.powi(t)).sqrt() / (1.0 - beta1.powi(t));
+            for (((x, g), a), b) in p.iter_mut().zip(&g).zip(&mut m1).zip(&mut m2) {
+                *a = beta1 * *a + (1.0 - beta1) * g;
+                *b = beta2 * *b + (1.0 - beta2) * g * g;
+                *x -= lr * *a / (b.sqrt() + eps);
+            }
+        }
+        let loss: f64 = (0..n)
+            .collect::<Vec<_>>()
+            .par_chunks(CHUNK)
+            .map(|part| {
+                part.iter()
+                    .map(|&i| {
+                        row_loss(
+                            &layout,
+                            &p,
+                            &z[i * NUM_FEATURES..(i + 1) * NUM_FEATURES],
+                            &e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES],
+                            None,
+                        )
+                    })
+                    .sum::<f64>()
+            })
+            .collect::<Vec<f64>>()
+            .iter()
+            .sum::<f64>()
+            / n as f64;
+        epoch_loss.push(loss);
+    }
+    let (w1, b1, w2, b2) = layout.split(&p);
+    let weights = SwitchWeights {
+        hidden: h,
+        mean,
+        std,
+        w1: w1.to_vec(),
+        b1: b1.to_vec(),
+        w2: w2.to_vec(),
+        b2: b2.to_vec(),
+        notes: String::new(),
+    };
+    weights.validate()?;
+    Ok((
+        weights,
+        FitReport {
+            epoch_loss,
+            candidate_mean_deg,
+            best_mean_deg: best,
+        },
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows where feature 0 says which candidate is right: below 0.5 the
+    /// network (0) is exact and the guided pass (1) is 10° off, above it
+    /// the other way round; candidates 2 and 3 are always 20° off.
+    fn rows(n: usize) -> Vec<f32> {
+        let mut out = Vec::with_capacity(n * ROW_LEN);
+        for i in 0..n {
+            let x0 = (i * 37 % 100) as f32 / 100.0;
+            let mut r = [0.1f32; ROW_LEN];
+            r[0] = x0;
+            r[1] = (i % 7) as f32;
+            let ten = 10f32.to_radians();
+            let (e0, e1) = if x0 < 0.5 { (0.0, ten) } else { (ten, 0.0) };
+            r[NUM_FEATURES..].copy_from_slice(&[e0, e1, 2.0 * ten, 2.0 * ten]);
+            out.extend(r);
+        }
+        out
+    }
+
+    #[test]
+    fn the_fit_learns_which_candidate_is_right() {
+        let data = rows(2000);
+        let params = FitParams {
+            epochs: 30,
+            batch: 256,
+            learning_rate: 1e-2,
+            ..FitParams::default()
+        };
+        let (w, report) = fit(&data, &[0, 1, 2, 3], &params).unwrap();
+        assert!((report.best_mean_deg - 0.0).abs() < 1e-9);
+        assert!((report.candidate_mean_deg[2] - 20.0).abs() < 1e-4);
+        let first = report.epoch_loss[0];
+        let last = *report.epoch_loss.last().unwrap();
+        assert!(last < 1.0 && last < first, "loss {first} -> {last}");
+        let mut x = [0.1; NUM_FEATURES];
+        x[0] = 0.2;
+        assert!(
+            w.probabilities(&x)[0] > 0.9,
+            "{:?} {:?}",
+            w.probabilities(&x),
+            report
+        );
+        x[0] = 0.8;
+        assert!(w.probabilities(&x)[1] > 0.9);
+    }
+
+    #[test]
+    fn disallowed_candidates_are_never_chosen_and_bad_rows_are_refused() {
+        let data = rows(500);
+        let params = FitParams {
+            epochs: 3,
+            ..FitParams::default()
+        };
+        let (w, report) = fit(&data, &[1, 2], &params).unwrap();
+        assert!((report.best_mean_deg - 5.0).abs() < 0.5);
+        let x = [0.1; NUM_FEATURES];
+        let p = w.probabilities(&x);
+        assert_eq!(p[0], 0.0);
+        assert_eq!(p[3], 0.0);
+        assert!(fit(&data[..ROW_LEN * 3 + 1], &[0], &params).is_err());
+        assert!(fit(&data, &[], &params).is_err());
+        assert!(fit(&data, &[4], &params).is_err());
+        let mut bad = data.clone();
+        bad[5] = f32::NAN;
+        assert!(fit(&bad, &[0], &params).unwrap_err().contains("non-finite"));
+    }
+}
