@@ -18,9 +18,9 @@
 //! Features, in order (angles in radians): ∠(net, guided), ∠(net, GNF),
 //! ∠(guided, GNF), ∠(net, current); mean and largest ∠ between the face's
 //! network normal and its 1-ring's; mean ∠ between the face's current normal
-//! and its 1-ring's; largest 1-ring ∠ of the GNF normals; the iteration k;
-//! then three per-mesh values: the median of feature 6 (a noise level), the
-//! median of feature 4, and the fraction of faces whose feature 5 is below
+//! and its 1-ring's; largest 1-ring ∠ of the GNF normals; the iteration k
+//! (clamped to 10); then three per-mesh values: the median of feature 6
+//! (0-based; a noise level), the median of feature 4, and the fraction of faces whose feature 5 is below
 //! 10° (how much of the mesh is flat).
 
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_normals};
@@ -29,6 +29,10 @@ use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Topology};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+
+/// The iteration feature is clamped to this (the switch is fitted on 10
+/// iterations; later ones look like the 10th).
+pub const MAX_ITERATION_FEATURE: usize = 10;
 
 /// Features per face.
 pub const NUM_FEATURES: usize = 12;
@@ -217,7 +221,7 @@ pub fn features(topology: &Topology, c: &Candidates, k: usize) -> Vec<[f64; NUM_
                 net_max,
                 current_mean,
                 gnf_max,
-                k as f64,
+                k.min(MAX_ITERATION_FEATURE) as f64,
                 0.0,
                 0.0,
                 0.0,
