@@ -87,15 +87,9 @@ fn trained_network_is_nearly_rotation_equivariant() {
 /// faces than without it, and E_a no worse beyond noise.
 #[test]
 fn the_fold_guard_folds_no_more_faces_on_the_example() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let path = root.join("models/lite");
-    if !path.join("manifest.toml").is_file() {
-        println!("SKIP: no shipped bundle at {}", path.display());
+    let Some((bundle, noisy, clean)) = shipped_and_example() else {
         return;
-    }
-    let bundle = Bundle::load(&path).unwrap();
-    let noisy = normalnet_mesh::read_mesh(root.join("examples/noisy-part.obj")).unwrap();
-    let clean = normalnet_mesh::read_mesh(root.join("examples/clean-part.obj")).unwrap();
+    };
     let run = |fold_guard: bool| {
         let params = normalnet_net::DenoiseParams {
             iterations: 4,
@@ -121,19 +115,13 @@ fn the_fold_guard_folds_no_more_faces_on_the_example() {
 /// (measured 2026-12-01: 7.33° vs 8.79°; the paper form with its auto stop).
 #[test]
 fn the_shipped_switch_beats_the_paper_form_on_the_example() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let path = root.join("models/lite");
-    if !path.join("manifest.toml").is_file() {
-        println!("SKIP: no shipped bundle at {}", path.display());
+    let Some((bundle, noisy, clean)) = shipped_and_example() else {
         return;
-    }
-    let bundle = Bundle::load(&path).unwrap();
+    };
     assert!(
         bundle.manifest.switch.is_some(),
         "models/lite has a [switch]"
     );
-    let noisy = normalnet_mesh::read_mesh(root.join("examples/noisy-part.obj")).unwrap();
-    let clean = normalnet_mesh::read_mesh(root.join("examples/clean-part.obj")).unwrap();
     let e_a = |switch: bool| {
         let params = normalnet_net::DenoiseParams {
             switch,
@@ -147,4 +135,19 @@ fn the_shipped_switch_beats_the_paper_form_on_the_example() {
     let (switched, paper) = (e_a(true), e_a(false));
     println!("E_a: switch {switched:.3}°, paper form {paper:.3}°");
     assert!(switched < paper - 0.5, "switch {switched} vs paper {paper}");
+}
+
+/// The shipped bundle and the shipped example (noisy, clean); `None` (with a
+/// SKIP line) when the bundle folder is absent.
+fn shipped_and_example() -> Option<(Bundle, normalnet_mesh::Mesh, normalnet_mesh::Mesh)> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let path = root.join("models/lite");
+    if !path.join("manifest.toml").is_file() {
+        println!("SKIP: no shipped bundle at {}", path.display());
+        return None;
+    }
+    let bundle = Bundle::load(&path).unwrap();
+    let noisy = normalnet_mesh::read_mesh(root.join("examples/noisy-part.obj")).unwrap();
+    let clean = normalnet_mesh::read_mesh(root.join("examples/clean-part.obj")).unwrap();
+    Some((bundle, noisy, clean))
 }
