@@ -190,6 +190,9 @@ pub struct IterationStats {
     pub mean_change_deg: f64,
     /// wall-clock seconds of the iteration
     pub seconds: f64,
+    /// with the learned switch: the share of faces whose largest weight was
+    /// "stay" (the run stops at [`switch::STAY_SHARE_TO_STOP`]); 0 without it
+    pub stay_share: f64,
 }
 
 impl StageTimes {
@@ -227,7 +230,7 @@ pub fn denoise(
     // being filtered (`freeze_deg`)
     let mut previous: Option<Vec<Vec3>> = None;
     let mut frozen = vec![false; n];
-    let mut switch_says_stop = false;
+    let mut stay_share = 0.0;
     let learned_switch = bundle.manifest.switch.as_ref().filter(|_| params.switch);
     let mut switch_state =
         learned_switch.map(|_| switch::SwitchState::new(mesh, &topology, params.mu_g));
@@ -275,7 +278,7 @@ pub fn denoise(
             let candidates = state.candidates(&current, &topology, normals);
             let features = switch::features(&topology, &candidates, k);
             let (blended, stay) = switch::blend(weights, &candidates, &features);
-            switch_says_stop = stay as f64 >= switch::STAY_SHARE_TO_STOP * n as f64;
+            stay_share = stay as f64 / n.max(1) as f64;
             blended
         } else if params.guided_from > 0 && k >= params.guided_from {
             let guided = gt_guided_normals(
@@ -329,9 +332,10 @@ pub fn denoise(
             faces_evaluated: active.len(),
             mean_change_deg,
             seconds: iteration_start.elapsed().as_secs_f64(),
+            stay_share,
         });
         let stop = if learned_switch.is_some() {
-            switch_says_stop
+            stay_share >= switch::STAY_SHARE_TO_STOP
         } else {
             k > 1 && mean_change_deg < params.auto_stop_deg
         };
@@ -729,6 +733,21 @@ mod tests {
         // always "stay": the vertices lie in their faces' planes and do not move
         bundle.manifest.switch = Some(crate::switch::tests::constant(3));
         let stay = run(&bundle, true);
+        // ... and the run stops after the first iteration: every face stayed
+        let params = DenoiseParams {
+            iterations: 5,
+            vertex_iterations: 3,
+            ..DenoiseParams::default()
+        };
+        let (_, times) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();
+        assert_eq!(times.iterations.len(), 1);
+        assert_eq!(times.iterations[0].stay_share, 1.0);
+        let fixed = DenoiseParams {
+            auto_stop_deg: 0.0,
+            ..params
+        };
+        let (_, times) = denoise(&mesh, &bundle, &fixed, &NoProgress).unwrap();
+        assert_eq!(times.iterations.len(), 5);
         let largest = mesh
             .positions
             .iter()
