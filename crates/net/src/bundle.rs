@@ -559,10 +559,23 @@ mod tests {
         m.write(&path).unwrap();
         let err = Bundle::load(dir.path()).unwrap_err();
         assert!(err.to_string().contains("grid side"), "{err}");
-        let mut m = manifest;
+        let mut m = manifest.clone();
         m.networks.pop();
         m.write(&path).unwrap();
         let err = Bundle::load(dir.path()).unwrap_err();
         assert!(err.to_string().contains("5 networks"), "{err}");
+        // a switch of the wrong shape is named, with the manifest's path
+        let mut m = manifest.clone();
+        let mut switch = crate::switch::tests::constant(0);
+        switch.b1.push(0.0);
+        m.switch = Some(switch);
+        m.write(&path).unwrap();
+        let err = Bundle::load(dir.path()).unwrap_err().to_string();
+        assert!(err.contains("switch: b1") && err.contains("manifest.toml"), "{err}");
+        // a good one survives the round trip
+        let mut m = manifest;
+        m.switch = Some(crate::switch::tests::constant(2));
+        m.write(&path).unwrap();
+        assert_eq!(Bundle::load(dir.path()).unwrap().manifest, m);
     }
 }
