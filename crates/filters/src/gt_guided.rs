@@ -113,8 +113,10 @@ fn check_inputs(mesh: &Mesh, topology: &Topology, gt_normals: &[Vec3]) -> Result
     Ok(())
 }
 
-/// The pass behind [`gt_guided_normals`] for already computed geometry.
-fn gt_guided_pass(
+/// [`gt_guided_normals`] for geometry already computed from the mesh
+/// (`geometry = FaceGeometry::new(mesh)`): the same output, one geometry
+/// pass fewer for a caller that needs the geometry anyway.
+pub fn gt_guided_pass(
     topology: &Topology,
     geometry: &FaceGeometry,
     gt_normals: &[Vec3],

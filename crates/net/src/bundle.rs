@@ -571,7 +571,10 @@ mod tests {
         m.switch = Some(switch);
         m.write(&path).unwrap();
         let err = Bundle::load(dir.path()).unwrap_err().to_string();
-        assert!(err.contains("switch: b1") && err.contains("manifest.toml"), "{err}");
+        assert!(
+            err.contains("switch: b1") && err.contains("manifest.toml"),
+            "{err}"
+        );
         // a good one survives the round trip
         let mut m = manifest;
         m.switch = Some(crate::switch::tests::constant(2));

@@ -20,10 +20,10 @@
 //! network normal and its 1-ring's; mean ∠ between the face's current normal
 //! and its 1-ring's; largest 1-ring ∠ of the GNF normals; the iteration k
 //! (clamped to 10); then three per-mesh values: the median of feature 6
-//! (0-based; a noise level), the median of feature 4, and the fraction of faces whose feature 5 is below
-//! 10° (how much of the mesh is flat).
+//! (0-based; a noise level), the median of feature 4, and the fraction of
+//! faces whose feature 5 is below 10° (how much of the mesh is flat).
 
-use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_normals};
+use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_pass};
 use normalnet_filters::{Gnf, GnfParams, NormalFilter};
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Topology};
@@ -167,8 +167,8 @@ impl SwitchState {
         topology: &Topology,
         net: Vec<Vec3>,
     ) -> Candidates {
-        let guided = gt_guided_normals(current, topology, &net, &[self.mu_g], GT_GUIDED_SIGMA_S);
         let geometry = FaceGeometry::new(current);
+        let guided = gt_guided_pass(topology, &geometry, &net, &[self.mu_g], GT_GUIDED_SIGMA_S);
         let mut gnf = vec![[0.0; 3]; current.num_faces()];
         self.gnf
             .pass(topology, &geometry, &geometry.normals, &mut gnf);

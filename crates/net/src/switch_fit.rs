@@ -148,17 +148,16 @@ pub fn fit(
         return Err(format!("allowed candidates {allowed:?}"));
     }
     let n = rows.len() / ROW_LEN;
-    let row = |i: usize| &rows[i * ROW_LEN..(i + 1) * ROW_LEN];
     // feature standardisation
     let mut mean = vec![0.0; NUM_FEATURES];
     let mut var = [0.0; NUM_FEATURES];
-    for i in 0..n {
-        for (m, x) in mean.iter_mut().zip(row(i)) {
+    for r in rows.chunks_exact(ROW_LEN) {
+        for (m, x) in mean.iter_mut().zip(r) {
             *m += f64::from(*x) / n as f64;
         }
     }
-    for i in 0..n {
-        for ((v, m), x) in var.iter_mut().zip(&mean).zip(row(i)) {
+    for r in rows.chunks_exact(ROW_LEN) {
+        for ((v, m), x) in var.iter_mut().zip(&mean).zip(r) {
             *v += (f64::from(*x) - m).powi(2) / n as f64;
         }
     }
@@ -167,20 +166,19 @@ pub fn fit(
         .iter()
         .map(|v| if v.sqrt() < 1e-6 { 1.0 } else { v.sqrt() })
         .collect();
-    let z: Vec<f64> = (0..n)
-        .flat_map(|i| {
-            let r = row(i);
-            (0..NUM_FEATURES).map(move |j| f64::from(r[j]))
-        })
-        .enumerate()
-        .map(|(k, x)| (x - mean[k % NUM_FEATURES]) / std[k % NUM_FEATURES])
-        .collect();
-    let e: Vec<f64> = (0..n)
-        .flat_map(|i| {
-            row(i)[NUM_FEATURES..]
+    let z: Vec<f64> = rows
+        .chunks_exact(ROW_LEN)
+        .flat_map(|r| {
+            r[..NUM_FEATURES]
                 .iter()
-                .map(|x| f64::from(*x).to_degrees())
+                .zip(&mean)
+                .zip(&std)
+                .map(|((x, m), s)| (f64::from(*x) - m) / s)
         })
+        .collect();
+    let e: Vec<f64> = rows
+        .chunks_exact(ROW_LEN)
+        .flat_map(|r| r[NUM_FEATURES..].iter().map(|x| f64::from(*x).to_degrees()))
         .collect();
     let mut mask = [-1e9; NUM_CANDIDATES];
     for &c in allowed {
