@@ -13,6 +13,10 @@
 //! - `learned SWITCH.toml`: the switch of that file's `[switch]` table
 //!   (env `DUMP=OUT` also appends rows along its path)
 //!
+//! Env `STATS=1`: after each iteration print E_a/stay share/mean turn of
+//! the network outputs since the previous iteration/mean turn of the
+//! chosen normals from the current ones (degrees).
+//!
 //! Env `AUTO_STOP=DEG` (default 0: all ITERATIONS): stop after an
 //! iteration whose network outputs turned less than DEG on average.
 
@@ -74,6 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut chosen = [0usize; NUM_CANDIDATES];
     print!("{mode}:");
     for k in 1..=iterations {
+        let stay_before = chosen[NUM_CANDIDATES - 1];
         let current = noisy.with_positions(positions.clone());
         let i = network_for_iteration(k);
         let (net, _) = filtered_normals(
@@ -139,6 +144,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             _ => return Err(format!("unknown mode {mode}").into()),
         };
+        let turn = filtered
+            .iter()
+            .zip(&c.normals[NUM_CANDIDATES - 1])
+            .map(|(a, b)| vec3::angle(*a, *b).to_degrees())
+            .sum::<f64>()
+            / n as f64;
         vertex_update_with(
             &mut positions,
             &noisy.faces,
@@ -152,7 +163,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &mut buffers,
         );
         let e_a = compare(&gt, &noisy.with_positions(positions.clone()))?.e_a_deg;
-        print!(" {e_a:.3}");
+        if std::env::var_os("STATS").is_some() {
+            let stay = (chosen[NUM_CANDIDATES - 1] - stay_before) as f64 / n as f64;
+            print!(" {e_a:.3}/{stay:.3}/{change:.3}/{turn:.3}");
+        } else {
+            print!(" {e_a:.3}");
+        }
         std::io::stdout().flush().ok();
         if k > 1 && change < auto_stop {
             break;

@@ -127,6 +127,11 @@ pub struct TrainConfig {
     /// from the bundle's network k (same preset and residual form), and
     /// the manifest counts its samples and seconds on top of the bundle's
     pub init_from: String,
+    /// The first network to train (1-based; default 1). The networks before
+    /// it are `init_from`'s own, copied unchanged, and the training meshes
+    /// are regenerated through them: e.g. `first_network = 6` continues
+    /// only the bundle's last network.
+    pub first_network: usize,
     /// κ: cubes of side `κ·d_s/α_c` instead of the preset's `d_s/α_c` (SPEC
     /// §5 scale note; 1 = the preset, ≈ 1.8 = the paper's implied extent).
     /// The bundle records the resulting `α_c/κ` as its `voxel.alpha_c`.
@@ -160,6 +165,7 @@ impl Default for TrainConfig {
             loss: "mse".into(),
             residual_from: 0,
             init_from: String::new(),
+            first_network: 1,
             voxel_scale: 1.0,
         }
     }
@@ -220,6 +226,19 @@ impl TrainConfig {
             return Err(bad(format!(
                 "voxel_scale = {} must be positive",
                 self.voxel_scale
+            )));
+        }
+        if !(1..=INTERVALS.len()).contains(&self.first_network) {
+            return Err(bad(format!(
+                "first_network = {} must lie in 1..=6",
+                self.first_network
+            )));
+        }
+        if self.first_network > 1 && self.init_from.is_empty() {
+            return Err(bad(format!(
+                "first_network = {} takes networks 1..{} from a bundle: set init_from",
+                self.first_network,
+                self.first_network - 1
             )));
         }
         if !(self.lr > 0.0 && self.lr.is_finite()) {
@@ -375,6 +394,44 @@ fn make_pairs(
     Ok(pairs)
 }
 
+/// Moves the training and validation meshes from the state network `k`
+/// (0-based) meets to the next network's (`regenerate` for the passes of
+/// network `k`'s interval) and saves them in `OUT/states/` for `--resume`.
+fn advance_meshes(
+    pairs: &mut [Pair],
+    val_pairs: &mut [Pair],
+    net: &NetWeights,
+    k: usize,
+    config: &TrainConfig,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(), NetError> {
+    let engine = Cnn::new(net).map_err(|e| NetError::Record {
+        path: out.join(crate::bundle::network_file(k)),
+        message: e.to_string(),
+    })?;
+    let passes = INTERVALS[k + 1].0 - INTERVALS[k].0;
+    progress.message(&format!("regenerating meshes with network {}", k + 1));
+    for set in [&mut *pairs, &mut *val_pairs] {
+        regenerate(
+            set,
+            &engine,
+            config.residual(k),
+            config.voxel_params(),
+            passes,
+            config.inference_batch,
+            progress,
+        )?;
+    }
+    for (i, p) in pairs.iter().chain(val_pairs.iter()).enumerate() {
+        normalnet_mesh::write_mesh(
+            out.join("states").join(format!("stage{}_{i}.obj", k + 1)),
+            &p.state,
+        )?;
+    }
+    Ok(())
+}
+
 /// Per-network progress, saved in `OUT/state.toml` for `--resume`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct RunState {
@@ -456,6 +513,20 @@ pub fn train(
                     p.state = m;
                 }
             }
+        }
+    }
+    // networks before `first_network`: the init bundle's own, unchanged
+    if let Some((dir, manifest)) = &init {
+        for k in run.finished..config.first_network - 1 {
+            let file = crate::bundle::network_file(k);
+            std::fs::copy(dir.join(&file), out.join(&file)).map_err(|e| NetError::io(out, e))?;
+            let net = load_network(&model_config, &config.preset, &out.join(&file))?;
+            advance_meshes(&mut pairs, &mut val_pairs, &net, k, config, out, progress)?;
+            networks.push(net);
+            run.networks.truncate(k);
+            run.networks.push(manifest.networks[k].clone());
+            run.finished = k + 1;
+            save_state(out, &run)?;
         }
     }
     let mut total_pool = 0;
@@ -595,10 +666,6 @@ pub fn train(
             &config.preset,
             &out.join(crate::bundle::network_file(k)),
         )?;
-        let best_engine = Cnn::new(&best).map_err(|e| NetError::Record {
-            path: out.join(crate::bundle::network_file(k)),
-            message: e.to_string(),
-        })?;
         let (prior_samples, prior_seconds) = init.as_ref().map_or((0, 0.0), |(_, m)| {
             (m.networks[k].samples_seen, m.networks[k].train_seconds)
         });
@@ -615,37 +682,12 @@ pub fn train(
             validation_baseline_deg: baseline,
             residual,
         };
+        if k + 1 < INTERVALS.len().min(config.stop_after) {
+            advance_meshes(&mut pairs, &mut val_pairs, &best, k, config, out, progress)?;
+        }
         networks.push(best);
         run.networks.truncate(k);
         run.networks.push(info);
-        if k + 1 < INTERVALS.len().min(config.stop_after) {
-            let passes = INTERVALS[k + 1].0 - INTERVALS[k].0;
-            progress.message(&format!("regenerating meshes with network {}", k + 1));
-            regenerate(
-                &mut pairs,
-                &best_engine,
-                residual,
-                voxel,
-                passes,
-                config.inference_batch,
-                progress,
-            )?;
-            regenerate(
-                &mut val_pairs,
-                &best_engine,
-                residual,
-                voxel,
-                passes,
-                config.inference_batch,
-                progress,
-            )?;
-            for (i, p) in pairs.iter().chain(val_pairs.iter()).enumerate() {
-                normalnet_mesh::write_mesh(
-                    out.join("states").join(format!("stage{}_{i}.obj", k + 1)),
-                    &p.state,
-                )?;
-            }
-        }
         run.finished = k + 1;
         run.step = 0;
         run.best_val = f64::INFINITY;
@@ -675,11 +717,12 @@ pub fn train(
         seed: config.seed,
         batch: config.batch,
         learning_rate: format!(
-            "{} (warm-started networks: {}) × {}^(step/{}) per network, Adam(0.9, 0.999, 1e-8), MSE",
+            "{} (warm-started networks: {}) × {}^(step/{}) per network, Adam(0.9, 0.999, 1e-8), loss {}",
             config.lr,
             if config.lr_warm > 0.0 { config.lr_warm } else { config.lr },
             config.lr_decay,
-            config.lr_decay_steps
+            config.lr_decay_steps,
+            config.loss.to_uppercase()
         ),
         regeneration: format!(
             "M_(k+1) from network k at μ_g {REGEN_MU_G}, N_v {REGEN_VERTEX_ITERATIONS}: CNN on {} (regen = true), oracle GT-guided GNF pass (μ_g 0.4, σ_s 2·d_s) on {}",
@@ -689,8 +732,16 @@ pub fn train(
         notes: format!(
             "{}steps per network {:?}, wall-clock limits {:?} s, warm start {}, validation = mean angle (deg) of the μ_g 0.35 output vs its target on {} balanced faces (yaw 0); last sample pool {} faces; total run {:.0} s",
             init.as_ref().map_or(String::new(), |(dir, _)| format!(
-                "continued from the bundle {} (samples and seconds include its training); ",
-                dir.display()
+                "continued from the bundle {} (samples and seconds include its training{}); ",
+                dir.display(),
+                if config.first_network > 1 {
+                    format!(
+                        "; networks 1..{} are its own, unchanged",
+                        config.first_network - 1
+                    )
+                } else {
+                    String::new()
+                }
             )),
             config.steps, config.max_seconds, config.warm_start, config.validation_faces, total_pool,
             run_start.elapsed().as_secs_f64()

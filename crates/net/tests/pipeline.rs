@@ -176,6 +176,44 @@ fn a_run_continues_a_bundle_and_counts_its_samples() {
             .contains("continued from the bundle")
     );
 
+    // only the last networks: the earlier ones are the bundle's own
+    let fourth = tempfile::tempdir().unwrap();
+    let tail = TrainConfig {
+        first_network: 5,
+        ..more.clone()
+    };
+    let tail_manifest = train(&tail, fourth.path(), false, &NoProgress).unwrap();
+    assert_eq!(tail_manifest.networks[..4], base.networks[..4]);
+    for k in 0..4 {
+        let file = normalnet_net::bundle::network_file(k);
+        assert_eq!(
+            std::fs::read(first.path().join(&file)).unwrap(),
+            std::fs::read(fourth.path().join(&file)).unwrap(),
+            "network {}",
+            k + 1
+        );
+    }
+    for k in 4..6 {
+        assert_eq!(
+            tail_manifest.networks[k].samples_seen,
+            base.networks[k].samples_seen + tail.steps[k] * tail.batch
+        );
+    }
+    assert!(tail_manifest.training.notes.contains("1..4 are its own"));
+    assert!(fourth.path().join("states/stage4_0.obj").is_file());
+    let log = std::fs::read_to_string(fourth.path().join("train_log.csv")).unwrap();
+    assert!(!log.lines().any(|l| l.starts_with("4,")));
+    assert!(log.lines().any(|l| l.starts_with("5,")));
+    let no_bundle = TrainConfig {
+        first_network: 2,
+        init_from: String::new(),
+        ..more.clone()
+    };
+    let err = no_bundle
+        .validate(std::path::Path::new("x.toml"))
+        .unwrap_err();
+    assert!(err.to_string().contains("init_from"), "{err}");
+
     // a bundle of another residual form or voxel grid is refused before any training
     let third = tempfile::tempdir().unwrap();
     let other_form = TrainConfig {
@@ -223,4 +261,24 @@ fn a_non_positive_voxel_scale_is_refused() {
     };
     let err = config.validate(std::path::Path::new("x.toml")).unwrap_err();
     assert!(err.to_string().contains("voxel_scale"), "{err}");
+}
+
+#[test]
+fn the_shipped_training_configs_are_valid() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs");
+    let mut read = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.starts_with("train-") && name.ends_with(".toml") {
+            let config = TrainConfig::read(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(!config.sources.is_empty(), "{name}");
+            read += 1;
+        }
+    }
+    assert!(
+        read >= 5,
+        "found {read} training configs in {}",
+        dir.display()
+    );
 }
