@@ -7,12 +7,10 @@
 use crate::conv::{FoldedConv, Fused, Level, MulAdd, Plain};
 
 /// Occupied cubes of a `[cin, n, n, n]` channel-major grid: flat cube indices
-/// (ascending), their `(d, h, w)` coordinates and their `cin` values,
-/// channels-last.
+/// and their `cin` values, channels-last.
 #[derive(Default)]
 pub(crate) struct Occupied {
     pub index: Vec<u32>,
-    pub coords: Vec<[u16; 3]>,
     pub values: Vec<f32>,
 }
 
@@ -20,18 +18,11 @@ impl Occupied {
     /// Collects the cubes of `grid` with any non-zero channel.
     pub(crate) fn gather(&mut self, grid: &[f32], cin: usize) {
         self.index.clear();
-        self.coords.clear();
         self.values.clear();
         let cubes = grid.len() / cin;
-        let n = (cubes as f64).cbrt().round() as usize;
-        debug_assert_eq!(n * n * n, cubes);
-        debug_assert!(n <= usize::from(u16::MAX));
         for i in 0..cubes {
             if (0..cin).any(|c| grid[c * cubes + i] != 0.0) {
                 self.index.push(i as u32);
-                // n ≤ u16::MAX: the grid side of a preset (21 or 35)
-                self.coords
-                    .push([(i / (n * n)) as u16, ((i / n) % n) as u16, (i % n) as u16]);
                 self.values.extend((0..cin).map(|c| grid[c * cubes + i]));
             }
         }
@@ -135,19 +126,11 @@ pub(crate) fn reach(i: usize, p: usize, k: usize, m: usize) -> std::ops::Range<u
     lo..hi.max(lo)
 }
 
-/// Tap-major scatter: for each of the `k³` taps, every occupied cube adds
-/// its contribution to the one output cube that tap reaches. The tap's
-/// weights stay in cache and, for a fixed tap, distinct inputs reach
-/// distinct outputs, so the loop has no dependency chain through `out`.
-/// Taps run in ascending order: an output cube `o` hears input `o − p + kk`,
-/// so it receives its contributions in ascending input order, each one summed over the input
-/// channels before it is added: the same f32 operations in the same order
-/// as an input-major loop.
 #[inline(always)]
 fn scatter<const CO: usize, F: MulAdd>(
     c: &FoldedConv,
     occ: &Occupied,
-    _n: usize,
+    n: usize,
     out: &mut [f32],
     m: usize,
     relu: bool,
@@ -157,27 +140,33 @@ fn scatter<const CO: usize, F: MulAdd>(
     for row in out.chunks_exact_mut(CO) {
         row.copy_from_slice(&bias);
     }
-    for tap in 0..k * k * k {
-        let (kd, kh, kw) = (tap / (k * k), (tap / k) % k, tap % k);
-        let wt = &c.w[tap * cin * CO..(tap + 1) * cin * CO];
-        for (v, xyz) in occ.values.chunks_exact(cin).zip(&occ.coords) {
-            // o = i + p − kk, inside [0, m)
-            let [od, oh, ow] = [(xyz[0], kd), (xyz[1], kh), (xyz[2], kw)]
-                .map(|(i, kk)| (usize::from(i) + p).wrapping_sub(kk));
-            if od >= m || oh >= m || ow >= m {
-                continue;
-            }
-            let mut acc = [0.0f32; CO];
-            for (ci, &x) in v.iter().enumerate() {
-                let wr: &[f32; CO] = wt[ci * CO..ci * CO + CO].try_into().expect("weight row");
-                for j in 0..CO {
-                    acc[j] = F::mul_add(x, wr[j], acc[j]);
+    for (slot, &i) in occ.index.iter().enumerate() {
+        let v = &occ.values[slot * cin..slot * cin + cin];
+        let i = i as usize;
+        let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
+        for kd in reach(id, p, k, m) {
+            let od = id + p - kd;
+            for kh in reach(ih, p, k, m) {
+                let oh = ih + p - kh;
+                for kw in reach(iw, p, k, m) {
+                    let ow = iw + p - kw;
+                    let tap = (kd * k + kh) * k + kw;
+                    let wt = &c.w[tap * cin * CO..(tap + 1) * cin * CO];
+                    let mut acc = [0.0f32; CO];
+                    for (ci, &x) in v.iter().enumerate() {
+                        let wr: &[f32; CO] =
+                            wt[ci * CO..ci * CO + CO].try_into().expect("weight row");
+                        for j in 0..CO {
+                            acc[j] = F::mul_add(x, wr[j], acc[j]);
+                        }
+                    }
+                    let o = (od * m + oh) * m + ow;
+                    let dst: &mut [f32; CO] =
+                        (&mut out[o * CO..o * CO + CO]).try_into().expect("out row");
+                    for j in 0..CO {
+                        dst[j] += acc[j];
+                    }
                 }
-            }
-            let o = (od * m + oh) * m + ow;
-            let dst: &mut [f32; CO] = (&mut out[o * CO..o * CO + CO]).try_into().expect("out row");
-            for j in 0..CO {
-                dst[j] += acc[j];
             }
         }
     }
@@ -190,89 +179,7 @@ fn scatter<const CO: usize, F: MulAdd>(
 
 #[cfg(test)]
 mod tests {
-    use super::{Occupied, reach, scatter};
-    use crate::conv::{FoldedConv, Fused, MulAdd, Plain};
-
-    /// The input-major scatter the tap-major one replaced: each occupied
-    /// cube adds its contribution to every output it reaches.
-    fn input_major<const CO: usize, F: MulAdd>(
-        c: &FoldedConv,
-        occ: &Occupied,
-        n: usize,
-        out: &mut [f32],
-        m: usize,
-    ) {
-        let (cin, k, p) = (c.cin, c.k, c.pad);
-        for row in out.chunks_exact_mut(CO) {
-            row.copy_from_slice(&c.b[..CO]);
-        }
-        for (slot, &i) in occ.index.iter().enumerate() {
-            let v = &occ.values[slot * cin..slot * cin + cin];
-            let i = i as usize;
-            let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
-            for kd in reach(id, p, k, m) {
-                for kh in reach(ih, p, k, m) {
-                    for kw in reach(iw, p, k, m) {
-                        let tap = (kd * k + kh) * k + kw;
-                        let mut acc = [0.0f32; CO];
-                        for (ci, &x) in v.iter().enumerate() {
-                            for j in 0..CO {
-                                acc[j] = F::mul_add(x, c.w[(tap * cin + ci) * CO + j], acc[j]);
-                            }
-                        }
-                        let o = (((id + p - kd) * m + ih + p - kh) * m + iw + p - kw) * CO;
-                        for j in 0..CO {
-                            out[o + j] += acc[j];
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn tap_major_scatter_equals_input_major_bit_for_bit() {
-        const CO: usize = 16;
-        let (n, k, cin) = (9, 5, 3);
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 33) as f32 / (1u64 << 31) as f32) * 2.0 - 1.0
-        };
-        let conv = FoldedConv {
-            w: (0..k * k * k * cin * CO).map(|_| next()).collect(),
-            b: (0..CO).map(|_| next()).collect(),
-            cin,
-            cout: CO,
-            k,
-            stride: 1,
-            pad: 2,
-        };
-        // a sparse grid with occupied cubes on the borders and corners too
-        let cubes = n * n * n;
-        let mut grid = vec![0.0f32; cin * cubes];
-        for i in 0..cubes {
-            if next() > 0.6 || i == 0 || i == cubes - 1 {
-                for c in 0..cin {
-                    grid[c * cubes + i] = next();
-                }
-            }
-        }
-        let mut occ = Occupied::default();
-        occ.gather(&grid, cin);
-        assert!(occ.index.len() > 20 && occ.index.len() < cubes / 2);
-        let m = conv.output_side(n);
-        let (mut a, mut b) = (vec![0.0; m * m * m * CO], vec![0.0; m * m * m * CO]);
-        scatter::<CO, Plain>(&conv, &occ, n, &mut a, m, false);
-        input_major::<CO, Plain>(&conv, &occ, n, &mut b, m);
-        assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
-        scatter::<CO, Fused>(&conv, &occ, n, &mut a, m, false);
-        input_major::<CO, Fused>(&conv, &occ, n, &mut b, m);
-        assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
-        assert!(a.iter().any(|&x| x != conv.b[0]));
-    }
+    use super::reach;
 
     #[test]
     fn reach_clips_at_borders() {
