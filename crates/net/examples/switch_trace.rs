@@ -43,6 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let iterations: usize = args.get(4).map_or(Ok(10), |s| s.parse())?;
     let extra = args.get(5).cloned();
     let auto_stop: f64 = std::env::var("AUTO_STOP").map_or(0.0, |s| s.parse().expect("AUTO_STOP"));
+    let stats = std::env::var_os("STATS").is_some();
     let weights = match mode {
         "learned" => {
             let text = std::fs::read_to_string(extra.as_deref().expect("SWITCH.toml"))?;
@@ -144,12 +145,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             _ => return Err(format!("unknown mode {mode}").into()),
         };
-        let turn = filtered
-            .iter()
-            .zip(&c.normals[NUM_CANDIDATES - 1])
-            .map(|(a, b)| vec3::angle(*a, *b).to_degrees())
-            .sum::<f64>()
-            / n as f64;
+        // with STATS: how far the chosen normals turned from the current ones
+        let turn = stats.then(|| {
+            filtered
+                .iter()
+                .zip(&c.normals[NUM_CANDIDATES - 1])
+                .map(|(a, b)| vec3::angle(*a, *b).to_degrees())
+                .sum::<f64>()
+                / n as f64
+        });
         vertex_update_with(
             &mut positions,
             &noisy.faces,
@@ -163,7 +167,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &mut buffers,
         );
         let e_a = compare(&gt, &noisy.with_positions(positions.clone()))?.e_a_deg;
-        if std::env::var_os("STATS").is_some() {
+        if let Some(turn) = turn {
             let stay = (chosen[NUM_CANDIDATES - 1] - stay_before) as f64 / n as f64;
             print!(" {e_a:.3}/{stay:.3}/{change:.3}/{turn:.3}");
         } else {
