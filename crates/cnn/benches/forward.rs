@@ -1,11 +1,12 @@
-//! Forward samples/s of the `lite` and `paper` networks on sheet-like grids.
+//! Forward samples/s of the `lite` and `paper` networks on sheet-like grids,
+//! f32 and (where the CPU has AVX-512 VNNI) int8 residual blocks.
 #![allow(missing_docs)]
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use normalnet_cnn::Cnn;
+use normalnet_cnn::{Cnn, Precision};
 
 fn forward(c: &mut Criterion) {
     for (name, grid, channels, batch) in [
@@ -13,7 +14,7 @@ fn forward(c: &mut Criterion) {
         ("paper", 41, [64, 128, 256], 8),
     ] {
         let w = common::random_net(7, grid, channels);
-        let cnn = Cnn::new(&w).unwrap();
+        let mut cnn = Cnn::new(&w).unwrap();
         let grids: Vec<f32> = (0..batch)
             .flat_map(|i| common::sheet_grid(i as u64, grid))
             .collect();
@@ -24,6 +25,11 @@ fn forward(c: &mut Criterion) {
         g.bench_function(format!("batch{batch}"), |b| {
             b.iter(|| cnn.forward(&grids, &mut out).unwrap())
         });
+        if cnn.set_precision(Precision::Int8) == Precision::Int8 {
+            g.bench_function(format!("batch{batch}_int8"), |b| {
+                b.iter(|| cnn.forward(&grids, &mut out).unwrap())
+            });
+        }
         g.finish();
     }
 }

@@ -16,6 +16,7 @@
 //! maps `[3, D, H, W]` grids from `normalnet-voxel` to 18 outputs per face.
 
 mod conv;
+mod conv_int8;
 mod error;
 mod network;
 mod sparse_conv;
@@ -23,6 +24,6 @@ mod train;
 mod weights;
 
 pub use error::CnnError;
-pub use network::{Cnn, LayerTimes};
+pub use network::{Cnn, LayerTimes, Precision};
 pub use train::{AdamConfig, Loss, Trainer};
 pub use weights::{BatchNormWeights, BlockWeights, ConvWeights, LinearWeights, NetWeights};

@@ -1,6 +1,7 @@
 //! `Cnn`: a compiled network — folded layers, forward pass over a batch.
 
 use crate::conv::{FoldedConv, Level, Region, SUPPORTED_CHANNELS};
+use crate::conv_int8::{self, Int8Conv};
 use crate::error::CnnError;
 use crate::sparse_conv::Occupied;
 use crate::weights::{BatchNormWeights, LinearWeights, NetWeights};
@@ -53,6 +54,20 @@ struct Block {
     shortcut: FoldedConv,
     /// output side
     m: usize,
+    /// `a` and `b` in 8-bit integers, once [`Cnn::set_precision`] asked for them
+    int8: Option<(Int8Conv, Int8Conv)>,
+}
+
+/// Arithmetic of the residual blocks' 3³ convolutions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Precision {
+    /// f32 throughout (the default; equal to the training engine)
+    #[default]
+    F32,
+    /// 8-bit inputs and weights, exact i32 sums, f32 scale, bias and ReLU
+    /// (AVX-512 VNNI; about 1 % of a layer's output range per value). The
+    /// stem, shortcuts and fully connected layers stay f32.
+    Int8,
 }
 
 /// A trained NormalNet network compiled for fast CPU inference.
@@ -67,6 +82,8 @@ pub struct Cnn {
     level: Level,
     largest: usize,
     background: Background,
+    /// the blocks run their `int8` convolutions
+    int8: bool,
 }
 
 /// Activations of an all-empty grid: every cube whose receptive field holds
@@ -93,6 +110,8 @@ struct Scratch {
     near_a: Vec<bool>,
     near_s: Vec<bool>,
     near_y: Vec<bool>,
+    /// an input quantized for the int8 convolutions
+    quantized: Vec<u8>,
 }
 
 impl Cnn {
@@ -169,6 +188,7 @@ impl Cnn {
                 b: FoldedConv::new(&bw.conv_b, &bw.bn_b),
                 shortcut: FoldedConv::new(&bw.shortcut, &bw.bn_shortcut),
                 m,
+                int8: None,
             });
             largest = largest.max(m.pow(3) * cout);
             n = m;
@@ -214,6 +234,7 @@ impl Cnn {
             level: Level::detect(),
             largest,
             background: Background::default(),
+            int8: false,
         };
         let mut s = cnn.scratch();
         let mut out = vec![0.0; cnn.outputs()];
@@ -245,6 +266,32 @@ impl Cnn {
             Level::Avx512 => "avx512",
             Level::Avx2 => "avx2+fma",
             Level::Scalar => "scalar",
+        }
+    }
+
+    /// Chooses the arithmetic of the residual blocks' 3³ convolutions and
+    /// returns the one in effect: [`Precision::Int8`] needs AVX-512 VNNI and
+    /// channel counts the kernel handles (inputs a multiple of 4, outputs 16
+    /// to 256); otherwise the network stays [`Precision::F32`].
+    pub fn set_precision(&mut self, precision: Precision) -> Precision {
+        self.int8 = false;
+        if precision == Precision::Int8 && conv_int8::supported() {
+            for b in &mut self.blocks {
+                if b.int8.is_none() {
+                    b.int8 = Int8Conv::new(&b.a).zip(Int8Conv::new(&b.b));
+                }
+            }
+            self.int8 = self.blocks.iter().all(|b| b.int8.is_some());
+        }
+        self.precision()
+    }
+
+    /// The arithmetic in effect (see [`Self::set_precision`]).
+    pub fn precision(&self) -> Precision {
+        if self.int8 {
+            Precision::Int8
+        } else {
+            Precision::F32
         }
     }
 
@@ -302,6 +349,7 @@ impl Cnn {
             near_a: Vec::new(),
             near_s: Vec::new(),
             near_y: Vec::new(),
+            quantized: Vec::new(),
         }
     }
 
@@ -355,25 +403,26 @@ impl Cnn {
                 b.shortcut
                     .run(lv, x, n, y, false, false, only(near_y, None));
                 lap(2 + 3 * bi, &mut profile);
-                b.a.run(
-                    lv,
-                    x,
-                    n,
-                    t,
-                    false,
-                    true,
-                    only(near_a, Some(&self.background.a[bi])),
-                );
-                lap(3 + 3 * bi, &mut profile);
-                b.b.run(
-                    lv,
-                    t,
-                    m,
-                    y,
-                    true,
-                    true,
-                    only(near_y, Some(&self.background.y[bi])),
-                );
+                let region_a = only(near_a, Some(&self.background.a[bi]));
+                let region_b = only(near_y, Some(&self.background.y[bi]));
+                match &b.int8 {
+                    #[cfg(target_arch = "x86_64")]
+                    Some((qa, qb)) if self.int8 => {
+                        let sx = conv_int8::quantize(x, &mut s.quantized);
+                        // SAFETY: `set_precision` enables int8 only where
+                        // `conv_int8::supported()`.
+                        unsafe { qa.run(&s.quantized, sx, n, t, false, true, region_a) };
+                        lap(3 + 3 * bi, &mut profile);
+                        let st = conv_int8::quantize(t, &mut s.quantized);
+                        // SAFETY: as above.
+                        unsafe { qb.run(&s.quantized, st, m, y, true, true, region_b) };
+                    }
+                    _ => {
+                        b.a.run(lv, x, n, t, false, true, region_a);
+                        lap(3 + 3 * bi, &mut profile);
+                        b.b.run(lv, t, m, y, true, true, region_b);
+                    }
+                }
                 lap(4 + 3 * bi, &mut profile);
                 std::mem::swap(&mut s.near, &mut s.near_y);
             } else {

@@ -126,6 +126,11 @@ pub(crate) fn reach(i: usize, p: usize, k: usize, m: usize) -> std::ops::Range<u
     lo..hi.max(lo)
 }
 
+/// One output plane (fixed depth `od`) at a time, so the plane being summed
+/// (`m² · CO` floats: 28 KB for the lite stem) stays in L1; the occupied
+/// cubes that reach it are a contiguous run (they are sorted by index, so
+/// by depth). Each output receives the same contributions in the same order
+/// as a scatter over all cubes: the results are bit-identical to it.
 #[inline(always)]
 fn scatter<const CO: usize, F: MulAdd>(
     c: &FoldedConv,
@@ -137,21 +142,33 @@ fn scatter<const CO: usize, F: MulAdd>(
 ) {
     let (cin, k, p) = (c.cin, c.k, c.pad);
     let bias: [f32; CO] = c.b[..CO].try_into().expect("bias length");
-    for row in out.chunks_exact_mut(CO) {
-        row.copy_from_slice(&bias);
-    }
-    for (slot, &i) in occ.index.iter().enumerate() {
-        let v = &occ.values[slot * cin..slot * cin + cin];
-        let i = i as usize;
-        let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
-        for kd in reach(id, p, k, m) {
-            let od = id + p - kd;
+    let plane_len = m * m * CO;
+    for (od, plane) in out.chunks_exact_mut(plane_len).enumerate() {
+        for row in plane.chunks_exact_mut(CO) {
+            row.copy_from_slice(&bias);
+        }
+        // input depths id = od − p + kd, kd in 0..k
+        let first = od.saturating_sub(p);
+        let last = (od + k).saturating_sub(p + 1).min(n.saturating_sub(1));
+        let lo = occ.index.partition_point(|&i| (i as usize) < first * n * n);
+        let hi = occ
+            .index
+            .partition_point(|&i| (i as usize) < (last + 1) * n * n);
+        for slot in lo..hi {
+            // the stem has 3 input channels (`Cnn::new` checks): a fixed
+            // count lets the three products of a tap stay in registers
+            let v: [f32; 3] = occ.values[slot * cin..slot * cin + cin]
+                .try_into()
+                .expect("3 input channels");
+            let i = occ.index[slot] as usize;
+            let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
+            let kd = id + p - od;
             for kh in reach(ih, p, k, m) {
                 let oh = ih + p - kh;
                 for kw in reach(iw, p, k, m) {
                     let ow = iw + p - kw;
                     let tap = (kd * k + kh) * k + kw;
-                    let wt = &c.w[tap * cin * CO..(tap + 1) * cin * CO];
+                    let wt = &c.w[tap * 3 * CO..(tap + 1) * 3 * CO];
                     let mut acc = [0.0f32; CO];
                     for (ci, &x) in v.iter().enumerate() {
                         let wr: &[f32; CO] =
@@ -160,26 +177,114 @@ fn scatter<const CO: usize, F: MulAdd>(
                             acc[j] = F::mul_add(x, wr[j], acc[j]);
                         }
                     }
-                    let o = (od * m + oh) * m + ow;
-                    let dst: &mut [f32; CO] =
-                        (&mut out[o * CO..o * CO + CO]).try_into().expect("out row");
+                    let o = oh * m + ow;
+                    let dst: &mut [f32; CO] = (&mut plane[o * CO..o * CO + CO])
+                        .try_into()
+                        .expect("out row");
                     for j in 0..CO {
                         dst[j] += acc[j];
                     }
                 }
             }
         }
-    }
-    if relu {
-        for v in out.iter_mut() {
-            *v = v.max(0.0);
+        if relu {
+            for v in plane.iter_mut() {
+                *v = v.max(0.0);
+            }
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::reach;
+    use super::*;
+    use crate::weights::{BatchNormWeights, ConvWeights};
+
+    /// The scatter over all occupied cubes at once, output in L2 (the form
+    /// before the per-plane loop).
+    fn scatter_all(c: &FoldedConv, occ: &Occupied, n: usize, out: &mut [f32], relu: bool) {
+        const CO: usize = 16;
+        let (cin, k, p) = (c.cin, c.k, c.pad);
+        let m = c.output_side(n);
+        for row in out.chunks_exact_mut(CO) {
+            row.copy_from_slice(&c.b);
+        }
+        for (slot, &i) in occ.index.iter().enumerate() {
+            let v = &occ.values[slot * cin..slot * cin + cin];
+            let i = i as usize;
+            let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
+            for kd in reach(id, p, k, m) {
+                for kh in reach(ih, p, k, m) {
+                    for kw in reach(iw, p, k, m) {
+                        let tap = (kd * k + kh) * k + kw;
+                        let mut acc = [0.0f32; CO];
+                        for (ci, &x) in v.iter().enumerate() {
+                            for j in 0..CO {
+                                acc[j] += x * c.w[(tap * cin + ci) * CO + j];
+                            }
+                        }
+                        let o = ((id + p - kd) * m + ih + p - kh) * m + iw + p - kw;
+                        for j in 0..CO {
+                            out[o * CO + j] += acc[j];
+                        }
+                    }
+                }
+            }
+        }
+        if relu {
+            for v in out.iter_mut() {
+                *v = v.max(0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn the_per_plane_scatter_is_bit_identical_to_scattering_all_cubes() {
+        let (n, cin, cout) = (9, 3, 16);
+        let mut state = 11u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        };
+        let conv = ConvWeights {
+            in_channels: cin,
+            out_channels: cout,
+            kernel: 5,
+            stride: 1,
+            padding: 2,
+            weight: (0..cout * cin * 125).map(|_| next()).collect(),
+            bias: Some((0..cout).map(|_| next()).collect()),
+        };
+        let bn = BatchNormWeights {
+            gamma: vec![1.0; cout],
+            beta: vec![0.0; cout],
+            mean: vec![0.0; cout],
+            var: vec![1.0; cout],
+            epsilon: 0.0,
+        };
+        let c = FoldedConv::new(&conv, &bn);
+        // a sparse grid, channel-major, cubes on every border included
+        let cubes = n * n * n;
+        let mut grid = vec![0.0f32; cin * cubes];
+        for i in (0..cubes).filter(|i| i % 7 == 0 || *i == cubes - 1) {
+            for ch in 0..cin {
+                grid[ch * cubes + i] = next();
+            }
+        }
+        let mut occ = Occupied::default();
+        occ.gather(&grid, cin);
+        for relu in [false, true] {
+            let mut want = vec![0.0f32; cubes * cout];
+            scatter_all(&c, &occ, n, &mut want, relu);
+            let mut got = vec![f32::NAN; cubes * cout];
+            scatter::<16, Plain>(&c, &occ, n, &mut got, n, relu);
+            assert!(
+                want.iter()
+                    .zip(&got)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+        }
+    }
 
     #[test]
     fn reach_clips_at_borders() {

@@ -2,7 +2,7 @@
 
 mod common;
 
-use normalnet_cnn::{Cnn, CnnError};
+use normalnet_cnn::{Cnn, CnnError, Precision};
 
 fn check(grid: usize, channels: [usize; 3], batch: usize, seed: u64) {
     let w = common::random_net(seed, grid, channels);
@@ -34,6 +34,47 @@ fn tiny_preset_matches_reference() {
 fn lite_preset_matches_reference() {
     check(21, [16, 32, 64], 2, 2);
 }
+
+#[test]
+fn int8_blocks_stay_within_quantization_error_of_the_reference() {
+    let (grid, batch) = (21, 6);
+    let w = common::random_net(5, grid, [16, 32, 64]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    assert_eq!(cnn.precision(), Precision::F32, "f32 unless asked");
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(500 + i as u64, grid))
+        .collect();
+    let mut exact = vec![0.0f32; batch * 18];
+    cnn.forward(&grids, &mut exact).unwrap();
+    if cnn.set_precision(Precision::Int8) != Precision::Int8 {
+        eprintln!("no AVX-512 VNNI on this CPU: int8 falls back to f32 (checked), rest skipped");
+        assert_eq!(cnn.precision(), Precision::F32);
+        return;
+    }
+    let mut out = vec![0.0f32; batch * 18];
+    cnn.forward(&grids, &mut out).unwrap();
+    let mut worst = 0.0f64;
+    for b in 0..batch {
+        let expected =
+            common::reference_forward(&w, &grids[b * cnn.grid_len()..(b + 1) * cnn.grid_len()]);
+        for (&got, &want) in out[b * 18..(b + 1) * 18].iter().zip(&expected) {
+            worst = worst.max((got as f64 - want).abs());
+        }
+    }
+    // outputs are tanh values in [-1, 1]; 8-bit blocks move them by a few
+    // thousandths, far more than f32 rounding (2e-4 above) but small
+    assert!(worst < INT8_TOLERANCE, "int8 off by {worst}");
+    assert!(
+        worst > 2e-4,
+        "int8 gave f32 results ({worst}): not running?"
+    );
+    // back to f32: the exact outputs again, bit for bit
+    assert_eq!(cnn.set_precision(Precision::F32), Precision::F32);
+    cnn.forward(&grids, &mut out).unwrap();
+    assert_eq!(out, exact);
+}
+
+const INT8_TOLERANCE: f64 = 0.03;
 
 #[test]
 fn empty_grid_is_finite() {

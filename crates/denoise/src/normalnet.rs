@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use normalnet_filters::{FOLD_GUARD_COS, GnfParams};
 use normalnet_mesh::outliers::denoise_around;
 use normalnet_mesh::{Mesh, Progress};
-use normalnet_net::{Bundle, DenoiseParams};
+use normalnet_net::{Bundle, DenoiseParams, Precision};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -18,6 +18,9 @@ use crate::registry::{Kind, Method, MethodInfo, Outcome};
 
 /// Environment variable naming a bundle folder (the `model` parameter wins).
 pub const MODEL_ENV: &str = "NORMALNET_MODEL";
+
+/// Whether NormalNet runs its residual blocks in 8-bit integers by default.
+pub const INT8_DEFAULT: bool = true;
 
 /// The registry entry.
 pub const INFO: MethodInfo = MethodInfo {
@@ -34,6 +37,7 @@ pub const INFO: MethodInfo = MethodInfo {
         ("no-fold-guard", "fold_guard"),
         ("auto-stop", "auto_stop_deg"),
         ("no-switch", "switch"),
+        ("f32", "int8"),
     ],
     defaults: defaults_of::<NormalnetParams>,
     build,
@@ -83,6 +87,10 @@ pub struct NormalnetParams {
     /// or a bundle without one: the paper's form; see
     /// `normalnet_net::switch`)
     pub switch: bool,
+    /// the residual blocks' 3³ convolutions in 8-bit integers where the CPU
+    /// has AVX-512 VNNI (`normalnet_cnn::Precision::Int8`); false, or a CPU
+    /// without it: f32
+    pub int8: bool,
 }
 
 impl Default for NormalnetParams {
@@ -103,6 +111,7 @@ impl Default for NormalnetParams {
             freeze_deg: d.freeze_deg,
             auto_stop_deg: d.auto_stop_deg,
             switch: d.switch,
+            int8: INT8_DEFAULT,
         }
     }
 }
@@ -172,13 +181,24 @@ impl NormalnetParams {
 struct NormalNet {
     params: NormalnetParams,
     bundle: Bundle,
+    /// what `int8` gave on this CPU
+    precision: Precision,
 }
 
 fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseError> {
     let params: NormalnetParams = resolve(name, given)?;
     params.check()?;
-    let bundle = params.load_bundle()?;
-    Ok(Box::new(NormalNet { params, bundle }))
+    let mut bundle = params.load_bundle()?;
+    let precision = bundle.set_precision(if params.int8 {
+        Precision::Int8
+    } else {
+        Precision::F32
+    });
+    Ok(Box::new(NormalNet {
+        params,
+        bundle,
+        precision,
+    }))
 }
 
 impl Method for NormalNet {
@@ -186,6 +206,8 @@ impl Method for NormalNet {
         let mut v = serde_json::to_value(&self.params).unwrap_or(Value::Null);
         // say which bundle ran, the built-in one included
         v["model"] = Value::String(self.bundle.path.display().to_string());
+        // and the arithmetic that ran (int8 falls back to f32 without VNNI)
+        v["int8"] = Value::Bool(self.precision == Precision::Int8);
         v
     }
 

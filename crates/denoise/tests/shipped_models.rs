@@ -95,3 +95,37 @@ fn gnf_after_is_gnf_run_on_normalnets_result() {
     assert_ne!(hybrid.positions, plain.positions);
     assert_eq!(hybrid.positions, expected.positions);
 }
+
+/// int8 residual blocks (the default where the CPU has AVX-512 VNNI) give
+/// nearly the f32 result, and `parameters` says which arithmetic ran.
+#[test]
+fn int8_is_the_default_and_close_to_f32() {
+    let (clean, noisy) = shape();
+    let run = |int8: Option<bool>| {
+        let mut p = Params::new();
+        p.insert("iterations".into(), 4.into());
+        if let Some(v) = int8 {
+            p.insert("int8".into(), v.into());
+        }
+        let d = Denoiser::new("normalnet", &p).unwrap();
+        let ran_int8 = d.parameters()["int8"].as_bool().unwrap();
+        let out = d.denoise(&noisy, None, &NoProgress).unwrap();
+        (ran_int8, compare(&clean, &out).unwrap().e_a_deg, out)
+    };
+    let (f32_ran, f32_e_a, f32_out) = run(Some(false));
+    assert!(!f32_ran);
+    let (default_ran, default_e_a, default_out) = run(None);
+    #[cfg(target_arch = "x86_64")]
+    let vnni = std::arch::is_x86_feature_detected!("avx512vnni")
+        && std::arch::is_x86_feature_detected!("avx512bw");
+    #[cfg(not(target_arch = "x86_64"))]
+    let vnni = false;
+    assert_eq!(default_ran, vnni, "int8 runs exactly where VNNI is there");
+    eprintln!("E_a f32 {f32_e_a:.4}°, default {default_e_a:.4}° (int8: {default_ran})");
+    if default_ran {
+        assert_ne!(default_out.positions, f32_out.positions);
+        assert!((default_e_a - f32_e_a).abs() < 0.1);
+    } else {
+        assert_eq!(default_out.positions, f32_out.positions);
+    }
+}

@@ -14,7 +14,7 @@
 
 use std::path::{Path, PathBuf};
 
-use normalnet_cnn::{Cnn, NetWeights};
+use normalnet_cnn::{Cnn, NetWeights, Precision};
 use normalnet_voxel::VoxelParams;
 use serde::{Deserialize, Serialize};
 
@@ -241,6 +241,16 @@ pub struct Bundle {
 }
 
 impl Bundle {
+    /// Sets the arithmetic of every network's residual blocks (see
+    /// [`Cnn::set_precision`]) and returns the one in effect.
+    pub fn set_precision(&mut self, precision: Precision) -> Precision {
+        let mut effective = precision;
+        for engine in &mut self.engines {
+            effective = engine.set_precision(precision);
+        }
+        effective
+    }
+
     /// Loads the bundle in folder `path`.
     ///
     /// # Errors

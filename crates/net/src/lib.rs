@@ -41,3 +41,4 @@ pub use error::NetError;
 pub use inference::{DenoiseParams, StageTimes, denoise};
 #[cfg(feature = "burn")]
 pub use model::NormalNet;
+pub use normalnet_cnn::Precision;

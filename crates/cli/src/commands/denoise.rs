@@ -165,6 +165,10 @@ pub struct MethodArgs {
     /// a GNF pass and the current normal).
     #[arg(long)]
     pub no_switch: bool,
+    /// NormalNet: f32 arithmetic throughout (default: the residual blocks'
+    /// 3³ convolutions in 8-bit integers where the CPU has AVX-512 VNNI).
+    #[arg(long = "f32")]
+    pub f32: bool,
 }
 
 /// Arguments of `normalnet denoise`.
@@ -199,7 +203,7 @@ pub struct Args {
 pub fn given_params(args: &MethodArgs, info: &MethodInfo) -> anyhow::Result<Params> {
     let num = |v: Option<f64>| v.map(Value::from);
     let int = |v: Option<usize>| v.map(Value::from);
-    let given: [(&str, Option<Value>); 21] = [
+    let given: [(&str, Option<Value>); 22] = [
         ("iterations", int(args.iterations)),
         ("auto-stop", num(args.auto_stop)),
         ("vertex-iterations", int(args.vertex_iterations)),
@@ -224,12 +228,13 @@ pub fn given_params(args: &MethodArgs, info: &MethodInfo) -> anyhow::Result<Para
                 .map(|p| Value::from(p.display().to_string())),
         ),
         ("guided-from", int(args.guided_from)),
-        // a `no-` flag sets its boolean parameter to false
+        // a `no-` flag (and `--f32`) sets its boolean parameter to false
         (
             "no-fold-guard",
             args.no_fold_guard.then_some(Value::Bool(false)),
         ),
         ("no-switch", args.no_switch.then_some(Value::Bool(false))),
+        ("f32", args.f32.then_some(Value::Bool(false))),
     ];
     let mut params = Params::new();
     for (flag, value) in given {

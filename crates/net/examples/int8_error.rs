@@ -1,0 +1,63 @@
+//! How far the int8 residual blocks move the network's normals from f32:
+//! angle between the filtered normals (μ_g 0.35 output; residual networks
+//! added to the face normal) of the two engines on every face of a mesh.
+//!
+//! `cargo run --release -p normalnet-net --example int8_error -- MESH [NETWORK 1..6 | all] [BUNDLE]`
+//! (bundle: `models/lite` by default)
+//! Prints mean / 99th percentile / largest angle (degrees) per network.
+
+use normalnet_mesh::{NoProgress, Topology, read_mesh};
+use normalnet_net::inference::filtered_normals;
+use normalnet_net::{Bundle, Precision};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let a: Vec<String> = std::env::args().collect();
+    let mesh = read_mesh(a.get(1).ok_or("usage: int8_error MESH [NETWORK]")?)?;
+    let networks: Vec<usize> = match a.get(2).map(String::as_str) {
+        Some("all") | None => (0..6).collect(),
+        Some(k) => vec![k.parse::<usize>()? - 1],
+    };
+    let bundle = a.get(3).map_or("models/lite", String::as_str);
+    let exact = Bundle::load(bundle)?;
+    let mut int8 = Bundle::load(bundle)?;
+    if int8.set_precision(Precision::Int8) != Precision::Int8 {
+        return Err("this CPU has no AVX-512 VNNI".into());
+    }
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let slot = exact.output_for_mu_g(0.35);
+    for k in networks {
+        let pass = |b: &Bundle| {
+            filtered_normals(
+                &mesh,
+                &topology,
+                &b.engines[k],
+                b.manifest.networks[k].residual,
+                b.voxel_params(),
+                slot,
+                256,
+                None,
+                &NoProgress,
+            )
+        };
+        let (a, _) = pass(&exact)?;
+        let (b, _) = pass(&int8)?;
+        let mut angles: Vec<f64> = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| {
+                let dot: f64 = x.iter().zip(y).map(|(p, q)| p * q).sum();
+                dot.clamp(-1.0, 1.0).acos().to_degrees()
+            })
+            .collect();
+        angles.sort_by(f64::total_cmp);
+        let mean = angles.iter().sum::<f64>() / angles.len() as f64;
+        let p99 = angles[(angles.len() * 99 / 100).min(angles.len() - 1)];
+        println!(
+            "network {}: {} faces, angle f32 vs int8 mean {mean:.3}°, p99 {p99:.3}°, max {:.3}°",
+            k + 1,
+            angles.len(),
+            angles[angles.len() - 1]
+        );
+    }
+    Ok(())
+}
