@@ -239,6 +239,69 @@ mod tests {
     }
 
     #[test]
+    fn masks_equal_marking_every_window_cube_by_cube() {
+        let n = 11;
+        let mut state = 3u32;
+        let mut coin = |p: u32| {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) % 100 < p
+        };
+        for (k, stride, pad) in [(5, 1, 2), (3, 1, 1), (3, 2, 1), (1, 2, 0)] {
+            let conv = ConvWeights {
+                in_channels: 1,
+                out_channels: 8,
+                kernel: k,
+                stride,
+                padding: pad,
+                weight: vec![0.0; 8 * k * k * k],
+                bias: None,
+            };
+            let bn = BatchNormWeights {
+                gamma: vec![1.0; 8],
+                beta: vec![0.0; 8],
+                mean: vec![0.0; 8],
+                var: vec![1.0; 8],
+                epsilon: 0.0,
+            };
+            let c = FoldedConv::new(&conv, &bn);
+            let m = c.output_side(n);
+            let mask: Vec<bool> = (0..n * n * n).map(|_| coin(6)).collect();
+            // every flagged input cube marks the outputs whose window holds it
+            let mut want = vec![false; m * m * m];
+            for id in 0..n {
+                for ih in 0..n {
+                    for iw in 0..n {
+                        if !mask[(id * n + ih) * n + iw] {
+                            continue;
+                        }
+                        let outs = |i: usize| {
+                            (0..m)
+                                .filter(move |&o| o * stride + k > i + pad && o * stride <= i + pad)
+                        };
+                        for od in outs(id) {
+                            for oh in outs(ih) {
+                                for ow in outs(iw) {
+                                    want[(od * m + oh) * m + ow] = true;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            let mut got = Vec::new();
+            c.window_mask(&mask, n, &mut got);
+            assert_eq!(got, want, "k {k} stride {stride}");
+            if stride == 1 && k == 5 {
+                let mut occ = Occupied::default();
+                let grid: Vec<f32> = mask.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect();
+                occ.gather(&grid, 1);
+                c.reach_mask(&occ, n, &mut got);
+                assert_eq!(got, want, "reach mask");
+            }
+        }
+    }
+
+    #[test]
     fn the_per_plane_scatter_is_bit_identical_to_scattering_all_cubes() {
         let (n, cin, cout) = (9, 3, 16);
         let mut state = 11u32;

@@ -1,8 +1,9 @@
 //! NormalNet inference speed (issue 12): face-passes per second of the whole
 //! pipeline, and of its two stages run one after the other (voxelizer, CNN),
 //! on Fandisk0.3 (when ../shared/data is present) and on a generated noisy
-//! 100k-face shape; then the default denoising of Fandisk0.3 end to end,
-//! exact and with the do-less shortcuts. With `NORMALNET_TORCH_PYTHON` set
+//! 100k-face shape, with the f32 and (where the CPU has VNNI) int8 engines;
+//! then the denoising of Fandisk0.3 end to end: the defaults (int8, freeze
+//! 0.5) and each shortcut off. With `NORMALNET_TORCH_PYTHON` set
 //! to a Python that has torch, the same lite network in PyTorch CPU f32
 //! (`../shared/tools/torch_bench/bench.py`, forward, 2 threads) runs in the
 //! same process run as the ratio anchor.
@@ -17,7 +18,7 @@ use normalnet_mesh::noise::{NoiseParams, add_noise};
 use normalnet_mesh::{Mesh, NoProgress, Topology, compare, read_mesh};
 use normalnet_net::bundle::network_for_iteration;
 use normalnet_net::inference::filtered_normals;
-use normalnet_net::{Bundle, NUM_OUTPUTS};
+use normalnet_net::{Bundle, NUM_OUTPUTS, Precision};
 use normalnet_voxel::Voxelizer;
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -46,7 +47,7 @@ fn meshes() -> Vec<(String, Mesh, Option<Mesh>)> {
 
 /// One pass of network 1 over every face: the pipeline as it runs
 /// (voxelizer and CNN overlapping), then the two stages alone.
-fn one_pass(name: &str, mesh: &Mesh, bundle: &Bundle) {
+fn one_pass(name: &str, mesh: &Mesh, bundle: &Bundle, precision: &str) {
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
     let n = mesh.num_faces();
     let net = &bundle.engines[network_for_iteration(1)];
@@ -95,13 +96,14 @@ fn one_pass(name: &str, mesh: &Mesh, bundle: &Bundle) {
         .collect();
     println!(
         "{}",
-        json!({"bench": "cnn_layers_one_thread", "mesh": name, "layers": per_sample})
+        json!({"bench": "cnn_layers_one_thread", "mesh": name, "precision": precision, "layers": per_sample})
     );
     println!(
         "{}",
         json!({
             "bench": "one_pass",
             "mesh": name,
+            "precision": precision,
             "faces": n,
             "threads": rayon::current_num_threads(),
             "instruction_set": net.instruction_set(),
@@ -115,12 +117,12 @@ fn one_pass(name: &str, mesh: &Mesh, bundle: &Bundle) {
 /// The default denoising, exact and with the shortcuts, end to end.
 fn end_to_end(name: &str, mesh: &Mesh, gt: &Mesh) {
     let variants: [(&str, Value); 4] = [
-        ("exact (defaults)", json!({})),
-        ("freeze_deg=0.5", json!({"freeze_deg": 0.5})),
-        ("auto_stop_deg=1", json!({"auto_stop_deg": 1.0})),
+        ("defaults (int8, freeze_deg=0.5)", json!({})),
+        ("int8, freeze_deg=0", json!({"freeze_deg": 0.0})),
+        ("f32, freeze_deg=0.5", json!({"int8": false})),
         (
-            "freeze_deg=0.5 auto_stop_deg=1",
-            json!({"freeze_deg": 0.5, "auto_stop_deg": 1.0}),
+            "f32, freeze_deg=0 (the exact pipeline)",
+            json!({"int8": false, "freeze_deg": 0.0}),
         ),
     ];
     for (label, params) in variants {
@@ -177,11 +179,16 @@ fn torch_anchor() {
 
 fn main() {
     // `cargo bench` passes `--bench`; nothing else is taken
-    let bundle = normalnet_net::embedded::lite().expect("built-in bundle");
+    let f32_bundle = normalnet_net::embedded::lite().expect("built-in bundle");
+    let mut int8_bundle = normalnet_net::embedded::lite().expect("built-in bundle");
+    let int8 = int8_bundle.set_precision(Precision::Int8) == Precision::Int8;
     let meshes = meshes();
     torch_anchor();
     for (name, mesh, _) in &meshes {
-        one_pass(name, mesh, &bundle);
+        one_pass(name, mesh, &f32_bundle, "f32");
+        if int8 {
+            one_pass(name, mesh, &int8_bundle, "int8");
+        }
     }
     if std::env::var_os("NORMALNET_SPEED_QUICK").is_none() {
         for (name, mesh, gt) in &meshes {
