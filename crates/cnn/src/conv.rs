@@ -228,7 +228,7 @@ fn dense_avx2<const CO: usize, const S: usize>(
 /// Valid kernel offsets along one axis for output coordinate `o`:
 /// `kk` with `0 <= o·s + kk − p < n`.
 #[inline(always)]
-fn taps(o: usize, s: usize, p: usize, k: usize, n: usize) -> std::ops::Range<usize> {
+pub(crate) fn taps(o: usize, s: usize, p: usize, k: usize, n: usize) -> std::ops::Range<usize> {
     let start = o * s;
     let lo = p.saturating_sub(start);
     let hi = (n + p).saturating_sub(start).min(k);

@@ -11,7 +11,7 @@
 //! scaled back to f32 once per output, where the bias, the residual sum and
 //! the ReLU are applied as in [`crate::conv`].
 
-use crate::conv::{FoldedConv, Region};
+use crate::conv::{FoldedConv, Region, taps};
 
 /// A [`FoldedConv`] with its weights in signed bytes, laid out
 /// `[k³][cin/4][cout][4]` (four input channels per i32 lane).
@@ -190,15 +190,6 @@ fn quantize_avx512(x: &[f32], out: &mut [u8]) -> f32 {
     scale
 }
 
-/// Valid kernel offsets along one axis (as `conv::taps`).
-#[inline(always)]
-fn taps(o: usize, s: usize, p: usize, k: usize, n: usize) -> std::ops::Range<usize> {
-    let start = o * s;
-    let lo = p.saturating_sub(start);
-    let hi = (n + p).saturating_sub(start).min(k);
-    lo..hi.max(lo)
-}
-
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
 #[allow(clippy::too_many_arguments)]
@@ -355,14 +346,7 @@ mod tests {
             weight,
             bias,
         };
-        let bn = BatchNormWeights {
-            gamma: vec![1.0; cout],
-            beta: vec![0.0; cout],
-            mean: vec![0.0; cout],
-            var: vec![1.0; cout],
-            epsilon: 0.0,
-        };
-        FoldedConv::new(&c, &bn)
+        FoldedConv::new(&c, &BatchNormWeights::identity(cout))
     }
 
     #[test]

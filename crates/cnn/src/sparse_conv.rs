@@ -256,14 +256,7 @@ mod tests {
                 weight: vec![0.0; 8 * k * k * k],
                 bias: None,
             };
-            let bn = BatchNormWeights {
-                gamma: vec![1.0; 8],
-                beta: vec![0.0; 8],
-                mean: vec![0.0; 8],
-                var: vec![1.0; 8],
-                epsilon: 0.0,
-            };
-            let c = FoldedConv::new(&conv, &bn);
+            let c = FoldedConv::new(&conv, &BatchNormWeights::identity(8));
             let m = c.output_side(n);
             let mask: Vec<bool> = (0..n * n * n).map(|_| coin(6)).collect();
             // every flagged input cube marks the outputs whose window holds it
@@ -318,14 +311,7 @@ mod tests {
             weight: (0..cout * cin * 125).map(|_| next()).collect(),
             bias: Some((0..cout).map(|_| next()).collect()),
         };
-        let bn = BatchNormWeights {
-            gamma: vec![1.0; cout],
-            beta: vec![0.0; cout],
-            mean: vec![0.0; cout],
-            var: vec![1.0; cout],
-            epsilon: 0.0,
-        };
-        let c = FoldedConv::new(&conv, &bn);
+        let c = FoldedConv::new(&conv, &BatchNormWeights::identity(cout));
         // a sparse grid, channel-major, cubes on every border included
         let cubes = n * n * n;
         let mut grid = vec![0.0f32; cin * cubes];

@@ -131,6 +131,18 @@ impl ConvWeights {
 }
 
 impl BatchNormWeights {
+    /// A batch norm that changes nothing (γ 1, β 0, mean 0, variance 1, ε 0).
+    #[cfg(test)]
+    pub(crate) fn identity(channels: usize) -> BatchNormWeights {
+        BatchNormWeights {
+            gamma: vec![1.0; channels],
+            beta: vec![0.0; channels],
+            mean: vec![0.0; channels],
+            var: vec![1.0; channels],
+            epsilon: 0.0,
+        }
+    }
+
     pub(crate) fn check(&self, layer: &str, channels: usize) -> Result<(), CnnError> {
         check_len(layer, "gamma", self.gamma.len(), channels)?;
         check_len(layer, "beta", self.beta.len(), channels)?;
