@@ -115,7 +115,7 @@ impl FoldedConv {
 
     /// Output side for an input of side `n`.
     pub(crate) fn output_side(&self, n: usize) -> usize {
-        (n + 2 * self.pad).saturating_sub(self.k) / self.stride + 1
+        output_side(n, self.k, self.stride, self.pad)
     }
 
     /// `out = [relu](conv(input) [+ out])`.
@@ -223,6 +223,13 @@ fn dense_avx2<const CO: usize, const S: usize>(
     region: Option<Region>,
 ) {
     dense::<CO, S, Fused>(c, input, n, out, m, acc, relu, region)
+}
+
+/// Output side of a convolution (kernel `k`, stride `s`, padding `p`) over
+/// an input of side `n`.
+#[inline(always)]
+pub(crate) fn output_side(n: usize, k: usize, s: usize, p: usize) -> usize {
+    (n + 2 * p).saturating_sub(k) / s + 1
 }
 
 /// Valid kernel offsets along one axis for output coordinate `o`:

@@ -11,7 +11,7 @@
 //! scaled back to f32 once per output, where the bias, the residual sum and
 //! the ReLU are applied as in [`crate::conv`].
 
-use crate::conv::{FoldedConv, Region, taps};
+use crate::conv::{FoldedConv, Region, output_side, taps};
 
 /// A [`FoldedConv`] with its weights in signed bytes, laid out
 /// `[k³][cin/4][cout][4]` (four input channels per i32 lane).
@@ -32,7 +32,8 @@ impl Int8Conv {
     /// Quantizes `c`; `None` where the layout does not fit the kernel
     /// (input channels not a multiple of 4, outputs not 16, 32, 64, 128 or 256).
     pub(crate) fn new(c: &FoldedConv) -> Option<Int8Conv> {
-        if !c.cin.is_multiple_of(4) || !c.cout.is_multiple_of(16) || c.cout > 256 {
+        // exactly the output channel counts `run` dispatches on
+        if !c.cin.is_multiple_of(4) || !matches!(c.cout, 16 | 32 | 64 | 128 | 256) {
             return None;
         }
         let (cin, cout) = (c.cin, c.cout);
@@ -207,7 +208,7 @@ fn dense_vnni<const V: usize, const S: usize>(
     let (cin, k, s, p) = (c.cin, c.k, c.stride, c.pad);
     let co = c.cout;
     debug_assert_eq!(co, 16 * V);
-    let m = (n + 2 * p).saturating_sub(k) / s + 1;
+    let m = output_side(n, k, s, p);
     debug_assert_eq!(out.len(), m * m * m * co);
     let groups = cin / 4;
     let mut factor = [[0.0f32; 16]; V];
