@@ -1,5 +1,5 @@
 //! Microseconds per sample in every layer, one thread, f32 and int8 residual
-//! blocks, on sheet-like grids of a random `lite` (or `paper`) network:
+//! blocks, the stem as scatter and as row convolutions, on sheet-like grids of a random `lite` (or `paper`) network:
 //! `cargo run --release -p normalnet-cnn --example layers -- [lite|paper] [samples]`.
 #![allow(missing_docs)]
 
@@ -21,15 +21,26 @@ fn main() {
         .flat_map(|i| common::sheet_grid(i as u64, grid))
         .collect();
     let mut out = vec![0.0f32; samples * 18];
-    for precision in [Precision::F32, Precision::Int8] {
+    let forms = [
+        (Precision::F32, false),
+        (Precision::F32, true),
+        (Precision::Int8, false),
+        (Precision::Int8, true),
+    ];
+    for (precision, rows) in forms {
         if cnn.set_precision(precision) != precision {
             println!("{precision:?}: not available on this CPU");
             continue;
         }
+        if cnn.set_row_stem(rows) != rows {
+            println!("row stem: not available for this network or CPU");
+            continue;
+        }
+        let stem = if rows { "row stem" } else { "scatter stem" };
         cnn.forward_profiled(&grids, &mut out).expect("warm-up");
         let times = cnn.forward_profiled(&grids, &mut out).expect("forward");
         let mut total = 0.0;
-        println!("{preset} {precision:?}, µs per sample, one thread:");
+        println!("{preset} {precision:?}, {stem}, µs per sample, one thread:");
         for (layer, s) in times.named() {
             let us = 1e6 * s / samples as f64;
             total += us;

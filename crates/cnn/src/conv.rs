@@ -176,6 +176,34 @@ impl FoldedConv {
         let m = self.output_side(n);
         out.clear();
         out.resize(m * m * m, false);
+        if n <= 64 {
+            // W rows as bit sets: an output row ORs the ≤ k² input rows of
+            // its (d, h) window, then each output cube tests its W window
+            let rows: Vec<u64> = mask_in
+                .chunks_exact(n)
+                .map(|r| r.iter().rev().fold(0, |bits, &f| bits << 1 | u64::from(f)))
+                .collect();
+            let windows: Vec<u64> = (0..m)
+                .map(|ow| taps(ow, s, p, k, n).fold(0, |bits, kw| bits | 1 << (ow * s + kw - p)))
+                .collect();
+            for od in 0..m {
+                for oh in 0..m {
+                    let mut any = 0u64;
+                    for kd in taps(od, s, p, k, n) {
+                        for kh in taps(oh, s, p, k, n) {
+                            any |= rows[(od * s + kd - p) * n + oh * s + kh - p];
+                        }
+                    }
+                    if any != 0 {
+                        let first = (od * m + oh) * m;
+                        for (flag, window) in out[first..first + m].iter_mut().zip(&windows) {
+                            *flag = any & window != 0;
+                        }
+                    }
+                }
+            }
+            return;
+        }
         for od in 0..m {
             for oh in 0..m {
                 for ow in 0..m {

@@ -2,9 +2,10 @@
 //!
 //! Training stays in `normalnet-net` (burn); this crate runs a trained network
 //! fast on the CPU, with no deep-learning stack: batch norm is folded into the
-//! preceding convolution or linear layer, the first 5³ convolution scatters
+//! preceding convolution or linear layer, the first 5³ convolution reads
 //! only the occupied voxels (a face neighbourhood is a surface sheet: a few %
-//! of the grid), later layers compute only the cubes whose receptive field
+//! of the grid; on AVX-512 as 1D convolutions of the grid rows that cross
+//! it, elsewhere as a scatter of the occupied cubes), later layers compute only the cubes whose receptive field
 //! reaches an occupied voxel (every other cube equals the activation of an
 //! empty grid, computed once), and the 3³ convolutions run channels-last with the
 //! output channels held in registers, compiled for AVX-512 / AVX2+FMA and
@@ -20,6 +21,7 @@ mod conv_int8;
 mod error;
 mod network;
 mod sparse_conv;
+mod stem_rows;
 mod train;
 mod weights;
 

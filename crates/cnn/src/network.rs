@@ -4,6 +4,7 @@ use crate::conv::{FoldedConv, Level, Region, SUPPORTED_CHANNELS};
 use crate::conv_int8::{self, Int8Conv};
 use crate::error::CnnError;
 use crate::sparse_conv::Occupied;
+use crate::stem_rows::{self, Rows};
 use crate::weights::{BatchNormWeights, LinearWeights, NetWeights};
 use rayon::prelude::*;
 
@@ -84,6 +85,8 @@ pub struct Cnn {
     background: Background,
     /// the blocks run their `int8` convolutions
     int8: bool,
+    /// the stem runs as row convolutions (`stem_rows`) instead of the scatter
+    row_stem: bool,
 }
 
 /// Activations of an all-empty grid: every cube whose receptive field holds
@@ -100,6 +103,7 @@ struct Background {
 /// Per-thread buffers of one forward pass.
 struct Scratch {
     occupied: Occupied,
+    rows: Rows,
     x: Vec<f32>,
     t: Vec<f32>,
     y: Vec<f32>,
@@ -235,7 +239,9 @@ impl Cnn {
             largest,
             background: Background::default(),
             int8: false,
+            row_stem: false,
         };
+        cnn.set_row_stem(true);
         let mut s = cnn.scratch();
         let mut out = vec![0.0; cnn.outputs()];
         let mut background = Background::default();
@@ -284,6 +290,17 @@ impl Cnn {
             self.int8 = self.blocks.iter().all(|b| b.int8.is_some());
         }
         self.precision()
+    }
+
+    /// Chooses how the stem runs: as 1D convolutions along the grid rows
+    /// (AVX-512, 3 → 16 channels: the lite stem; the default where it
+    /// applies) or as the scatter of occupied cubes (everywhere else). Both
+    /// compute the same convolution up to f32 rounding; returns the form in
+    /// effect (true: rows). For benchmarks and cross-checks.
+    pub fn set_row_stem(&mut self, rows: bool) -> bool {
+        self.row_stem =
+            rows && self.level == Level::Avx512 && stem_rows::serves(&self.stem, self.grid);
+        self.row_stem
     }
 
     /// The arithmetic in effect (see [`Self::set_precision`]).
@@ -340,6 +357,7 @@ impl Cnn {
     fn scratch(&self) -> Scratch {
         Scratch {
             occupied: Occupied::default(),
+            rows: Rows::default(),
             x: vec![0.0; self.largest],
             t: vec![0.0; self.largest],
             y: vec![0.0; self.largest],
@@ -379,10 +397,22 @@ impl Cnn {
         lap(0, &mut profile);
         let mut n = self.stem_side;
         let mut c = self.stem.cout;
-        self.stem
-            .run_sparse(lv, &s.occupied, self.grid, &mut s.x[..n * n * n * c], true);
-        if sparse {
-            self.stem.reach_mask(&s.occupied, self.grid, &mut s.near);
+        let stem_out = &mut s.x[..n * n * n * c];
+        match self.row_stem {
+            #[cfg(target_arch = "x86_64")]
+            true => {
+                s.rows.build(&s.occupied, self.grid, self.stem.pad, n);
+                let near = sparse.then_some(&mut s.near);
+                // SAFETY: `set_row_stem` checked AVX-512F and `serves`.
+                unsafe { stem_rows::run(&self.stem, &s.rows, self.grid, stem_out, true, near) };
+            }
+            _ => {
+                self.stem
+                    .run_sparse(lv, &s.occupied, self.grid, stem_out, true);
+                if sparse {
+                    self.stem.reach_mask(&s.occupied, self.grid, &mut s.near);
+                }
+            }
         }
         lap(1, &mut profile);
         for (bi, b) in self.blocks.iter().enumerate() {
@@ -499,7 +529,7 @@ impl LayerTimes {
     pub fn named(&self) -> Vec<(String, f64)> {
         let mut v = vec![
             ("gather occupied voxels".to_string(), self.seconds[0]),
-            ("stem 5³ conv (scatter)".to_string(), self.seconds[1]),
+            ("stem 5³ conv + masks".to_string(), self.seconds[1]),
         ];
         for b in 0..self.blocks {
             v.push((

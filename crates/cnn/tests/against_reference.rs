@@ -153,3 +153,34 @@ fn the_profiled_forward_gives_the_same_outputs_and_times_every_layer() {
         Err(CnnError::BufferSize { .. })
     ));
 }
+
+#[test]
+fn the_row_stem_equals_the_scatter() {
+    let w = common::random_net(3, 21, [16, 32, 64]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    let batch = 8;
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(300 + i as u64, 21))
+        .collect();
+    let mut rows = vec![0.0f32; batch * 18];
+    let mut scatter = rows.clone();
+    let available = cnn.set_row_stem(true);
+    cnn.forward(&grids, &mut rows).unwrap();
+    assert!(!cnn.set_row_stem(false));
+    cnn.forward(&grids, &mut scatter).unwrap();
+    if !available {
+        eprintln!(
+            "row stem not available ({}): scatter only",
+            cnn.instruction_set()
+        );
+        assert_eq!(rows, scatter);
+        return;
+    }
+    let worst = rows
+        .iter()
+        .zip(&scatter)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    println!("row stem vs scatter: largest output difference {worst:e}");
+    assert!(worst < 1e-5, "row stem off by {worst}");
+}

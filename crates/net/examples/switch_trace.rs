@@ -17,6 +17,9 @@
 //! the network outputs since the previous iteration/mean turn of the
 //! chosen normals from the current ones (degrees).
 //!
+//! Env `INT8=1`: the residual blocks in 8-bit integers (the denoiser's
+//! default where the CPU has AVX-512 VNNI); otherwise f32.
+//!
 //! Env `AUTO_STOP=DEG` (default 0: all ITERATIONS): stop after an
 //! iteration whose network outputs turned less than DEG on average.
 
@@ -64,10 +67,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         None => None,
     };
-    let bundle = match std::env::var_os("NORMALNET_MODEL") {
+    let mut bundle = match std::env::var_os("NORMALNET_MODEL") {
         Some(p) => normalnet_net::Bundle::load(p)?,
         None => normalnet_net::embedded::lite()?,
     };
+    if std::env::var_os("INT8").is_some() {
+        let got = bundle.set_precision(normalnet_cnn::Precision::Int8);
+        eprintln!("precision: {got:?}");
+    }
     let mu_g = 0.35;
     let topology = Topology::new(noisy.num_vertices(), &noisy.faces);
     let gt_normals = face_normals(&gt);

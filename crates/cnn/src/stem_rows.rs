@@ -1,0 +1,300 @@
+//! The stem (5³, 3 → 16 channels, stride 1) as dense 1D convolutions along
+//! grid rows, for AVX-512. The voxelizer turns every neighbourhood so that
+//! its mean normal is the grid's H axis (`normalnet_voxel::voxelizer`): the
+//! surface sheet lies across few H layers, and a W row (fixed D, H) is either
+//! empty or crosses the sheet for much of its length. So instead of
+//! scattering each occupied cube into its 125 outputs (a load, an add and a
+//! store per tap: `sparse_conv`), each output row (fixed D, H) sums, over the
+//! ≤ 25 non-empty input rows that reach it, a 1D convolution of that row with
+//! the 5 W taps — computed in blocks of [`CHUNK`] output cubes whose 16
+//! channels stay in registers, with the block's 15 weight vectors in
+//! registers too. Zeros inside a non-empty row are multiplied like any value:
+//! about 1.4× the scatter's multiply-adds on a flat sheet, at register speed.
+//!
+//! The result equals the scatter's up to f32 rounding (another summation
+//! order); a test checks it against an f64 convolution.
+
+use crate::conv::FoldedConv;
+use crate::sparse_conv::Occupied;
+
+/// Output cubes per register block: 7 accumulators, 15 weights and the
+/// broadcast input stay within the 32 vector registers.
+pub(crate) const CHUNK: usize = 7;
+
+const K: usize = 5;
+const CIN: usize = 3;
+const CO: usize = 16;
+const EMPTY: u32 = u32::MAX;
+
+/// The occupied cubes as zero-padded W rows, channels-last.
+#[derive(Default)]
+pub(crate) struct Rows {
+    /// per input row `d·n + h`: its slot in `values`, or [`EMPTY`]
+    slot: Vec<u32>,
+    /// per non-empty row: `len` cubes × 3 channels, cube `w` at `w + pad`
+    values: Vec<f32>,
+    /// per non-empty row: bit `w` set where cube `w` is occupied
+    bits: Vec<u64>,
+    len: usize,
+}
+
+impl Rows {
+    /// Lays out `occupied` (cubes of an `n³` grid) for a stem with padding
+    /// `pad` and output side `m`.
+    pub(crate) fn build(&mut self, occupied: &Occupied, n: usize, pad: usize, m: usize) {
+        self.len = m.div_ceil(CHUNK) * CHUNK + K - 1;
+        debug_assert!(n + pad <= self.len);
+        self.slot.clear();
+        self.slot.resize(n * n, EMPTY);
+        let mut used = 0u32;
+        for &i in &occupied.index {
+            let row = i as usize / n;
+            if self.slot[row] == EMPTY {
+                self.slot[row] = used;
+                used += 1;
+            }
+        }
+        self.values.clear();
+        self.values.resize(used as usize * self.len * CIN, 0.0);
+        self.bits.clear();
+        self.bits.resize(used as usize, 0);
+        for (cube, &i) in occupied.index.iter().enumerate() {
+            let (row, w) = (i as usize / n, i as usize % n);
+            self.bits[self.slot[row] as usize] |= 1 << w;
+            let at = (self.slot[row] as usize * self.len + w + pad) * CIN;
+            self.values[at..at + CIN]
+                .copy_from_slice(&occupied.values[cube * CIN..cube * CIN + CIN]);
+        }
+    }
+}
+
+/// Whether [`run`] serves this convolution on grids of side `n`.
+pub(crate) fn serves(c: &FoldedConv, n: usize) -> bool {
+    let m = c.output_side(n);
+    c.k == K && c.cin == CIN && c.cout == CO && c.stride == 1 && c.pad < K && n <= 64 && m <= 64
+}
+
+/// `out = [relu](conv(grid))`, `out` `[m, m, m, 16]` channels-last, from the
+/// rows of an `n³` grid built by [`Rows::build`] with this conv's padding;
+/// with `near`, also the output cubes whose window holds an occupied cube
+/// (len `m³`; what `FoldedConv::reach_mask` gives).
+///
+/// # Safety
+/// The CPU must have AVX-512F, and `serves(c, n)` must hold.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+pub(crate) unsafe fn run(
+    c: &FoldedConv,
+    rows: &Rows,
+    n: usize,
+    out: &mut [f32],
+    relu: bool,
+    mut near: Option<&mut Vec<bool>>,
+) {
+    use std::arch::x86_64::*;
+    let (p, m) = (c.pad, c.output_side(n));
+    assert!(serves(c, n) && out.len() == m * m * m * CO && rows.slot.len() == n * n);
+    if let Some(near) = near.as_deref_mut() {
+        near.clear();
+        near.resize(m * m * m, false);
+    }
+    assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
+    // SAFETY: `serves` means 16 output channels, so 16 biases.
+    let bias = unsafe { _mm512_loadu_ps(c.b.as_ptr()) };
+    let floor = if relu {
+        _mm512_setzero_ps()
+    } else {
+        _mm512_set1_ps(f32::NEG_INFINITY)
+    };
+    let background = _mm512_max_ps(bias, floor);
+    // (first value of the input row, first weight of its (kd, kh) taps)
+    let mut reach: Vec<(usize, usize)> = Vec::with_capacity(K * K);
+    let row_mask = if m == 64 { u64::MAX } else { (1u64 << m) - 1 };
+    for od in 0..m {
+        for oh in 0..m {
+            reach.clear();
+            let mut occupied = 0u64;
+            // input depth id = od + kd − p, height ih = oh + kh − p
+            for kd in 0..K {
+                let Some(id) = (od + kd).checked_sub(p).filter(|&i| i < n) else {
+                    continue;
+                };
+                for kh in 0..K {
+                    let Some(ih) = (oh + kh).checked_sub(p).filter(|&i| i < n) else {
+                        continue;
+                    };
+                    let slot = rows.slot[id * n + ih];
+                    if slot != EMPTY {
+                        occupied |= rows.bits[slot as usize];
+                        reach.push((slot as usize * rows.len * CIN, (kd * K + kh) * K * CIN * CO));
+                    }
+                }
+            }
+            let dst = &mut out[(od * m + oh) * m * CO..(od * m + oh + 1) * m * CO];
+            if reach.is_empty() {
+                for cube in dst.chunks_exact_mut(CO) {
+                    // SAFETY: `cube` holds 16 floats.
+                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), background) };
+                }
+                continue;
+            }
+            if let Some(near) = near.as_deref_mut() {
+                // output ow sees inputs ow − p .. ow − p + K − 1
+                let mut reached = 0u64;
+                for t in 0..K {
+                    reached |= if t <= p {
+                        occupied << (p - t)
+                    } else {
+                        occupied >> (t - p)
+                    };
+                }
+                reached &= row_mask;
+                let first = (od * m + oh) * m;
+                for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
+                    *flag = reached >> ow & 1 == 1;
+                }
+            }
+            for c0 in (0..m).step_by(CHUNK) {
+                let mut acc = [bias; CHUNK];
+                for &(x0, w0) in &reach {
+                    // SAFETY: `w0 + K·CIN·CO ≤ c.w.len()` (taps of one
+                    // (kd, kh)), and `x0 + (c0 + CHUNK + K − 1)·CIN ≤
+                    // rows.values.len()` (`c0 < m`, rows of `len` cubes).
+                    unsafe {
+                        let w = c.w.as_ptr().add(w0);
+                        let wr: [[__m512; CIN]; K] = std::array::from_fn(|kw| {
+                            std::array::from_fn(|ci| _mm512_loadu_ps(w.add((kw * CIN + ci) * CO)))
+                        });
+                        let x = rows.values.as_ptr().add(x0 + c0 * CIN);
+                        // output cube c0 + o reads padded inputs c0 + o + kw;
+                        // input j spelled out (a loop over it is not unrolled,
+                        // and `acc` would live on the stack)
+                        macro_rules! input {
+                            ($($j:literal)*) => {$(
+                                for ci in 0..CIN {
+                                    let v = _mm512_set1_ps(*x.add($j * CIN + ci));
+                                    for (kw, wk) in wr.iter().enumerate() {
+                                        if $j >= kw && $j - kw < CHUNK {
+                                            acc[$j - kw] = _mm512_fmadd_ps(v, wk[ci], acc[$j - kw]);
+                                        }
+                                    }
+                                }
+                            )*};
+                        }
+                        const _: () = assert!(CHUNK + K - 1 == 11);
+                        input!(0 1 2 3 4 5 6 7 8 9 10);
+                    }
+                }
+                for (o, a) in acc.iter().enumerate().take(m - c0) {
+                    let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
+                    // SAFETY: `cube` holds 16 floats.
+                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), _mm512_max_ps(*a, floor)) };
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::weights::{BatchNormWeights, ConvWeights};
+
+    /// `conv(grid)` in f64 straight from the definition (channel-major grid).
+    fn reference(conv: &ConvWeights, bn: &BatchNormWeights, grid: &[f32], n: usize) -> Vec<f64> {
+        let (k, p, co) = (conv.kernel, conv.padding, conv.out_channels);
+        let m = n + 2 * p + 1 - k;
+        let (scale, shift) = bn.affine();
+        let cubes = n * n * n;
+        let mut out = vec![0.0f64; m * m * m * co];
+        for od in 0..m {
+            for oh in 0..m {
+                for ow in 0..m {
+                    for o in 0..co {
+                        let mut s = conv.bias.as_ref().map_or(0.0, |b| b[o] as f64);
+                        for ci in 0..3 {
+                            for kd in 0..k {
+                                for kh in 0..k {
+                                    for kw in 0..k {
+                                        let (d, h, w) = (od + kd, oh + kh, ow + kw);
+                                        if d < p || h < p || w < p {
+                                            continue;
+                                        }
+                                        let (d, h, w) = (d - p, h - p, w - p);
+                                        if d >= n || h >= n || w >= n {
+                                            continue;
+                                        }
+                                        let x = grid[ci * cubes + (d * n + h) * n + w] as f64;
+                                        let wt = conv.weight
+                                            [(o * 3 + ci) * k * k * k + (kd * k + kh) * k + kw];
+                                        s += x * wt as f64;
+                                    }
+                                }
+                            }
+                        }
+                        out[((od * m + oh) * m + ow) * co + o] =
+                            s * scale[o] as f64 + shift[o] as f64;
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn rows_equal_the_convolution() {
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            eprintln!("skipped: no AVX-512F on this CPU");
+            return;
+        }
+        let mut state = 5u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        };
+        // sides around multiples of CHUNK; a sheet, scattered cubes, borders
+        for n in [6, 7, 9, 15] {
+            let conv = ConvWeights {
+                in_channels: 3,
+                out_channels: 16,
+                kernel: 5,
+                stride: 1,
+                padding: 2,
+                weight: (0..16 * 3 * 125).map(|_| next()).collect(),
+                bias: Some((0..16).map(|_| next()).collect()),
+            };
+            let bn = BatchNormWeights::identity(16);
+            let c = FoldedConv::new(&conv, &bn);
+            let cubes = n * n * n;
+            let mut grid = vec![0.0f32; 3 * cubes];
+            for i in 0..cubes {
+                let (h, w) = ((i / n) % n, i % n);
+                if h == n / 2 || i % 11 == 0 || i == cubes - 1 || (h == 0 && w == n - 1) {
+                    for ch in 0..3 {
+                        grid[ch * cubes + i] = next();
+                    }
+                }
+            }
+            let mut occ = Occupied::default();
+            occ.gather(&grid, 3);
+            let want = reference(&conv, &bn, &grid, n);
+            let m = c.output_side(n);
+            let mut rows = Rows::default();
+            rows.build(&occ, n, c.pad, m);
+            let mut want_near = Vec::new();
+            c.reach_mask(&occ, n, &mut want_near);
+            for relu in [false, true] {
+                let mut got = vec![f32::NAN; m * m * m * 16];
+                let mut near = vec![true; 3];
+                // SAFETY: AVX-512F detected above; `serves` holds.
+                unsafe { run(&c, &rows, n, &mut got, relu, Some(&mut near)) };
+                assert_eq!(near, want_near, "n {n}: near cubes");
+                for (g, w) in got.iter().zip(&want) {
+                    let w = if relu { w.max(0.0) } else { *w };
+                    assert!((*g as f64 - w).abs() < 1e-5, "n {n}: {g} vs {w}");
+                }
+            }
+        }
+    }
+}
