@@ -93,21 +93,56 @@ impl Int8Conv {
         // SAFETY: the caller checked the features.
         unsafe {
             match self.cout {
-                16 => {
-                    dense_vnni::<1, 8>(self, input, input_scale, n, out, accumulate, relu, region)
-                }
-                32 => {
-                    dense_vnni::<2, 4>(self, input, input_scale, n, out, accumulate, relu, region)
-                }
-                64 => {
-                    dense_vnni::<4, 2>(self, input, input_scale, n, out, accumulate, relu, region)
-                }
-                128 => {
-                    dense_vnni::<8, 1>(self, input, input_scale, n, out, accumulate, relu, region)
-                }
-                256 => {
-                    dense_vnni::<16, 1>(self, input, input_scale, n, out, accumulate, relu, region)
-                }
+                16 => dense_vnni::<1, 8, true>(
+                    self,
+                    input,
+                    input_scale,
+                    n,
+                    out,
+                    accumulate,
+                    relu,
+                    region,
+                ),
+                32 => dense_vnni::<2, 4, true>(
+                    self,
+                    input,
+                    input_scale,
+                    n,
+                    out,
+                    accumulate,
+                    relu,
+                    region,
+                ),
+                64 => dense_vnni::<4, 2, true>(
+                    self,
+                    input,
+                    input_scale,
+                    n,
+                    out,
+                    accumulate,
+                    relu,
+                    region,
+                ),
+                128 => dense_vnni::<8, 1, false>(
+                    self,
+                    input,
+                    input_scale,
+                    n,
+                    out,
+                    accumulate,
+                    relu,
+                    region,
+                ),
+                256 => dense_vnni::<16, 1, false>(
+                    self,
+                    input,
+                    input_scale,
+                    n,
+                    out,
+                    accumulate,
+                    relu,
+                    region,
+                ),
                 c => unreachable!("{c} output channels rejected by Int8Conv::new"),
             }
         }
@@ -194,7 +229,7 @@ fn quantize_avx512(x: &[f32], out: &mut [u8]) -> f32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
 #[allow(clippy::too_many_arguments)]
-fn dense_vnni<const V: usize, const S: usize>(
+fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
     c: &Int8Conv,
     input: &[u8],
     input_scale: f32,
@@ -217,23 +252,47 @@ fn dense_vnni<const V: usize, const S: usize>(
             *f = input_scale * c.scale[16 * v + j];
         }
     }
+    // i32 sums of one output cube → f32 scale, bias, [residual], [ReLU]
+    let finish = |sums: [__m512i; V], dst: &mut [f32]| {
+        for (v, sum) in sums.into_iter().enumerate() {
+            let f: &[f32; 16] = &factor[v];
+            let b: &[f32; 16] = c.bias[16 * v..16 * v + 16].try_into().expect("bias");
+            // SAFETY: 16 readable f32 each; unaligned loads.
+            let (fv, bv) = unsafe { (_mm512_loadu_ps(f.as_ptr()), _mm512_loadu_ps(b.as_ptr())) };
+            let mut y = _mm512_fmadd_ps(_mm512_cvtepi32_ps(sum), fv, bv);
+            let d: &mut [f32; 16] = (&mut dst[16 * v..16 * v + 16]).try_into().expect("out row");
+            if accumulate {
+                // SAFETY: 16 readable f32.
+                y = _mm512_add_ps(y, unsafe { _mm512_loadu_ps(d.as_ptr()) });
+            }
+            if relu {
+                y = _mm512_max_ps(y, _mm512_setzero_ps());
+            }
+            // SAFETY: 16 writable f32.
+            unsafe { _mm512_storeu_ps(d.as_mut_ptr(), y) };
+        }
+    };
+    let computed = |o: usize| region.is_none_or(|r| r.mask[o]);
     for od in 0..m {
         let rd = taps(od, s, p, k, n);
         for oh in 0..m {
             let rh = taps(oh, s, p, k, n);
-            for ow in 0..m {
+            let mut ow = 0;
+            while ow < m {
                 let rw = taps(ow, s, p, k, n);
                 let o = (od * m + oh) * m + ow;
-                let dst = &mut out[o * co..o * co + co];
-                if let Some(r) = region
-                    && !r.mask[o]
-                {
-                    if let Some(bg) = r.background {
-                        dst.copy_from_slice(&bg[o * co..o * co + co]);
+                if !computed(o) {
+                    if let Some(bg) = region.and_then(|r| r.background) {
+                        out[o * co..o * co + co].copy_from_slice(&bg[o * co..o * co + co]);
                     }
+                    ow += 1;
                     continue;
                 }
-                let mut accs = [[_mm512_setzero_si512(); V]; S];
+                // two neighbours along W with the same taps share each
+                // weight load (the sums are exact: the same bits either way)
+                let pair =
+                    PAIRED && ow + 1 < m && computed(o + 1) && taps(ow + 1, s, p, k, n) == rw;
+                let mut accs = [[[_mm512_setzero_si512(); V]; S]; 2];
                 for kd in rd.clone() {
                     let id = od * s + kd - p;
                     for kh in rh.clone() {
@@ -242,41 +301,99 @@ fn dense_vnni<const V: usize, const S: usize>(
                             let iw = ow * s + kw - p;
                             let i = (id * n + ih) * n + iw;
                             let tap = (kd * k + kh) * k + kw;
-                            let x = &input[i * cin..i * cin + cin];
                             let wt = &c.w[tap * cin * co..(tap + 1) * cin * co];
-                            // SAFETY: `x` holds `4 · groups` bytes and `wt`
-                            // `groups · co · 4` (checked by the slicing above);
-                            // every offset below stays inside them.
-                            unsafe {
-                                tap_products::<V, S>(&mut accs, x.as_ptr(), wt.as_ptr(), groups, co)
-                            };
+                            if pair {
+                                let x = &input[i * cin..(i + s) * cin + cin];
+                                let [a0, a1] = &mut accs;
+                                // SAFETY: `x` holds the `4 · groups` bytes of
+                                // both cubes (`s · cin` apart) and `wt`
+                                // `groups · co · 4`; offsets stay inside.
+                                unsafe {
+                                    tap_products_pair::<V, S>(
+                                        a0,
+                                        a1,
+                                        x.as_ptr(),
+                                        x.as_ptr().add(s * cin),
+                                        wt.as_ptr(),
+                                        groups,
+                                        co,
+                                    )
+                                };
+                            } else {
+                                let x = &input[i * cin..i * cin + cin];
+                                // SAFETY: `x` holds `4 · groups` bytes and `wt`
+                                // `groups · co · 4` (checked by the slicing
+                                // above); every offset below stays inside them.
+                                unsafe {
+                                    tap_products::<V, S>(
+                                        &mut accs[0],
+                                        x.as_ptr(),
+                                        wt.as_ptr(),
+                                        groups,
+                                        co,
+                                    )
+                                };
+                            }
                         }
                     }
                 }
-                for v in 0..V {
-                    let mut sum = accs[0][v];
-                    for acc in &accs[1..] {
-                        sum = _mm512_add_epi32(sum, acc[v]);
-                    }
-                    let f: &[f32; 16] = &factor[v];
-                    let b: &[f32; 16] = c.bias[16 * v..16 * v + 16].try_into().expect("bias");
-                    // SAFETY: 16 readable f32 each; unaligned loads.
-                    let (fv, bv) =
-                        unsafe { (_mm512_loadu_ps(f.as_ptr()), _mm512_loadu_ps(b.as_ptr())) };
-                    let mut y = _mm512_fmadd_ps(_mm512_cvtepi32_ps(sum), fv, bv);
-                    let d: &mut [f32; 16] =
-                        (&mut dst[16 * v..16 * v + 16]).try_into().expect("out row");
-                    if accumulate {
-                        // SAFETY: 16 readable f32.
-                        y = _mm512_add_ps(y, unsafe { _mm512_loadu_ps(d.as_ptr()) });
-                    }
-                    if relu {
-                        y = _mm512_max_ps(y, _mm512_setzero_ps());
-                    }
-                    // SAFETY: 16 writable f32.
-                    unsafe { _mm512_storeu_ps(d.as_mut_ptr(), y) };
+                for (cube, sets) in accs.iter().enumerate().take(1 + usize::from(pair)) {
+                    let sums = std::array::from_fn(|v| {
+                        sets[1..]
+                            .iter()
+                            .fold(sets[0][v], |sum, acc| _mm512_add_epi32(sum, acc[v]))
+                    });
+                    let at = (o + cube) * co;
+                    finish(sums, &mut out[at..at + co]);
                 }
+                ow += 1 + usize::from(pair);
             }
+        }
+    }
+}
+
+/// As [`tap_products`] for two output cubes at once: each weight vector is
+/// loaded once for both.
+///
+/// # Safety
+/// As [`tap_products`], for `x0` and `x1`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
+#[inline]
+unsafe fn tap_products_pair<const V: usize, const S: usize>(
+    a0: &mut [[std::arch::x86_64::__m512i; V]; S],
+    a1: &mut [[std::arch::x86_64::__m512i; V]; S],
+    x0: *const u8,
+    x1: *const u8,
+    w: *const i8,
+    groups: usize,
+    co: usize,
+) {
+    use std::arch::x86_64::*;
+    // half the accumulator sets per cube: as many chains in flight as alone
+    let sets = (S / 2).max(1);
+    let mut g = 0;
+    // SAFETY (all reads): g < groups, as in `tap_products`.
+    unsafe {
+        let mut group = |g: usize, u: usize| {
+            let xv0 = _mm512_set1_epi32(x0.add(4 * g).cast::<i32>().read_unaligned());
+            let xv1 = _mm512_set1_epi32(x1.add(4 * g).cast::<i32>().read_unaligned());
+            let wg = w.add(g * co * 4);
+            for v in 0..V {
+                let wv = _mm512_loadu_si512(wg.add(64 * v).cast());
+                a0[u][v] = _mm512_dpbusd_epi32(a0[u][v], xv0, wv);
+                a1[u][v] = _mm512_dpbusd_epi32(a1[u][v], xv1, wv);
+            }
+        };
+        while g + sets <= groups {
+            for u in 0..sets {
+                group(g + u, u);
+            }
+            g += sets;
+        }
+        while g < groups {
+            group(g, 0);
+            g += 1;
         }
     }
 }
@@ -400,6 +517,76 @@ mod tests {
                     "cin {cin} cout {cout}: worst {worst} of range {range}"
                 );
                 assert!(worst > 0.0, "quantization must show somewhere");
+            }
+        }
+    }
+
+    #[test]
+    fn pairing_output_cubes_changes_no_bit() {
+        if !supported() {
+            eprintln!("no AVX-512 VNNI on this CPU: skipped");
+            return;
+        }
+        let mut state = 3u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            state >> 8
+        };
+        for (cin, cout, stride, n) in [
+            (16, 16, 1, 7),
+            (16, 32, 2, 9),
+            (32, 32, 1, 6),
+            (32, 64, 1, 5),
+        ] {
+            let q = Int8Conv::new(&conv(cin, cout, stride, cin as u32 + 5)).expect("layout fits");
+            let m = output_side(n, 3, stride, 1);
+            let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
+            // a mask with runs and gaps, so pairs, singles and skipped cubes mix
+            let mask: Vec<bool> = (0..m * m * m).map(|_| next() % 4 != 0).collect();
+            let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
+            let region = Region {
+                mask: &mask,
+                background: Some(&background),
+            };
+            let start: Vec<f32> = (0..m * m * m * cout).map(|i| (i % 5) as f32).collect();
+            for (accumulate, relu) in [(false, true), (true, false)] {
+                let run = |paired: bool| {
+                    let mut out = start.clone();
+                    macro_rules! go {
+                        ($v:literal, $s:literal, $p:literal) => {
+                            // SAFETY: supported() checked the features.
+                            unsafe {
+                                dense_vnni::<$v, $s, $p>(
+                                    &q,
+                                    &x,
+                                    0.01,
+                                    n,
+                                    &mut out,
+                                    accumulate,
+                                    relu,
+                                    Some(region),
+                                )
+                            }
+                        };
+                    }
+                    match (cout, paired) {
+                        (16, true) => go!(1, 8, true),
+                        (16, false) => go!(1, 8, false),
+                        (32, true) => go!(2, 4, true),
+                        (32, false) => go!(2, 4, false),
+                        (64, true) => go!(4, 2, true),
+                        _ => go!(4, 2, false),
+                    }
+                    out
+                };
+                let (paired, single) = (run(true), run(false));
+                assert!(
+                    paired
+                        .iter()
+                        .zip(&single)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "cin {cin} cout {cout} stride {stride}"
+                );
             }
         }
     }
