@@ -33,8 +33,9 @@ pub(crate) struct Rows {
     slot: Vec<u32>,
     /// per non-empty row: `len` cubes × 3 channels, cube `w` at `w + pad`
     values: Vec<f32>,
-    /// per non-empty row: bit `w` set where cube `w` is occupied
-    bits: Vec<u64>,
+    /// per non-empty row: bit `ow` set where output cube `ow` of an output
+    /// row it feeds has an occupied cube of this row in its W window
+    reaches: Vec<u64>,
     len: usize,
 }
 
@@ -56,11 +57,13 @@ impl Rows {
         }
         self.values.clear();
         self.values.resize(used as usize * self.len * CIN, 0.0);
-        self.bits.clear();
-        self.bits.resize(used as usize, 0);
+        self.reaches.clear();
+        self.reaches.resize(used as usize, 0);
         for (cube, &i) in occupied.index.iter().enumerate() {
             let (row, w) = (i as usize / n, i as usize % n);
-            self.bits[self.slot[row] as usize] |= 1 << w;
+            // output ow sees inputs ow − pad .. ow − pad + K − 1
+            let outputs = ((1u64 << K) - 1) << (w + pad) >> (K - 1);
+            self.reaches[self.slot[row] as usize] |= outputs & output_bits(m);
             let at = (self.slot[row] as usize * self.len + w + pad) * CIN;
             self.values[at..at + CIN]
                 .copy_from_slice(&occupied.values[cube * CIN..cube * CIN + CIN]);
@@ -68,10 +71,15 @@ impl Rows {
     }
 }
 
+/// Bits `0..m` set.
+fn output_bits(m: usize) -> u64 {
+    if m == 64 { u64::MAX } else { (1u64 << m) - 1 }
+}
+
 /// Whether [`run`] serves this convolution on grids of side `n`.
 pub(crate) fn serves(c: &FoldedConv, n: usize) -> bool {
-    let m = c.output_side(n);
-    c.k == K && c.cin == CIN && c.cout == CO && c.stride == 1 && c.pad < K && n <= 64 && m <= 64
+    // bit sets of u64: every input cube's W window bits below 64
+    c.k == K && c.cin == CIN && c.cout == CO && c.stride == 1 && c.pad < K && n + c.pad + K <= 64
 }
 
 /// `out = [relu](conv(grid))`, `out` `[m, m, m, 16]` channels-last, from the
@@ -107,13 +115,13 @@ pub(crate) unsafe fn run(
         _mm512_set1_ps(f32::NEG_INFINITY)
     };
     let background = _mm512_max_ps(bias, floor);
-    // (first value of the input row, first weight of its (kd, kh) taps)
-    let mut reach: Vec<(usize, usize)> = Vec::with_capacity(K * K);
-    let row_mask = if m == 64 { u64::MAX } else { (1u64 << m) - 1 };
+    // (first value of the input row, first weight of its (kd, kh) taps,
+    // the output cubes it reaches)
+    let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
     for od in 0..m {
         for oh in 0..m {
             reach.clear();
-            let mut occupied = 0u64;
+            let mut reached = 0u64;
             // input depth id = od + kd − p, height ih = oh + kh − p
             for kd in 0..K {
                 let Some(id) = (od + kd).checked_sub(p).filter(|&i| i < n) else {
@@ -125,8 +133,10 @@ pub(crate) unsafe fn run(
                     };
                     let slot = rows.slot[id * n + ih];
                     if slot != EMPTY {
-                        occupied |= rows.bits[slot as usize];
-                        reach.push((slot as usize * rows.len * CIN, (kd * K + kh) * K * CIN * CO));
+                        let outputs = rows.reaches[slot as usize];
+                        reached |= outputs;
+                        let x0 = slot as usize * rows.len * CIN;
+                        reach.push((x0, (kd * K + kh) * K * CIN * CO, outputs));
                     }
                 }
             }
@@ -139,16 +149,6 @@ pub(crate) unsafe fn run(
                 continue;
             }
             if let Some(near) = near.as_deref_mut() {
-                // output ow sees inputs ow − p .. ow − p + K − 1
-                let mut reached = 0u64;
-                for t in 0..K {
-                    reached |= if t <= p {
-                        occupied << (p - t)
-                    } else {
-                        occupied >> (t - p)
-                    };
-                }
-                reached &= row_mask;
                 let first = (od * m + oh) * m;
                 for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
                     *flag = reached >> ow & 1 == 1;
@@ -156,7 +156,9 @@ pub(crate) unsafe fn run(
             }
             for c0 in (0..m).step_by(CHUNK) {
                 let mut acc = [bias; CHUNK];
-                for &(x0, w0) in &reach {
+                let chunk = ((1u64 << CHUNK) - 1) << c0;
+                // rows with no occupied cube near this block add only zeros
+                for &(x0, w0, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
                     // SAFETY: `w0 + K·CIN·CO ≤ c.w.len()` (taps of one
                     // (kd, kh)), and `x0 + (c0 + CHUNK + K − 1)·CIN ≤
                     // rows.values.len()` (`c0 < m`, rows of `len` cubes).
