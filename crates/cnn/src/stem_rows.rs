@@ -1,15 +1,18 @@
 //! The stem (5³, 3 → 16 channels, stride 1) as dense 1D convolutions along
 //! grid rows, for AVX-512. The voxelizer turns every neighbourhood so that
-//! its mean normal is the grid's H axis (`normalnet_voxel::voxelizer`): the
-//! surface sheet lies across few H layers, and a W row (fixed D, H) is either
-//! empty or crosses the sheet for much of its length. So instead of
-//! scattering each occupied cube into its 125 outputs (a load, an add and a
-//! store per tap: `sparse_conv`), each output row (fixed D, H) sums, over the
-//! ≤ 25 non-empty input rows that reach it, a 1D convolution of that row with
-//! the 5 W taps — computed in blocks of [`CHUNK`] output cubes whose 16
-//! channels stay in registers, with the block's 15 weight vectors in
-//! registers too. Zeros inside a non-empty row are multiplied like any value:
-//! about 1.4× the scatter's multiply-adds on a flat sheet, at register speed.
+//! its mean normal is the grid's H axis (`normalnet_voxel::voxelizer`), so
+//! the surface sheet lies across a few H layers and only those W rows (fixed
+//! D, H) hold occupied cubes. Instead of scattering each occupied cube into
+//! its 125 outputs (a load, an add and a store per tap: `sparse_conv`), each
+//! output row sums, over the ≤ 25 non-empty input rows that reach it, a 1D
+//! convolution of that row with the 5 W taps — in blocks of [`CHUNK`] output
+//! cubes whose 16 channels stay in registers, with the 15 weight vectors of
+//! the (kd, kh) in registers too; a row whose occupied cubes are all far from
+//! a block is skipped for it. Zeros inside a row are multiplied like any
+//! value: on real grids (a noisy validation box, first iteration) a row holds
+//! 5.9 occupied cubes of 21 and the blocks do 2.4× the scatter's
+//! multiply-adds, at register speed: 1.26× faster than scatter + mask there,
+//! 2.4× on the flat synthetic sheets of the layer benchmark.
 //!
 //! The result equals the scatter's up to f32 rounding (another summation
 //! order); a test checks it against an f64 convolution.
