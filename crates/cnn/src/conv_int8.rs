@@ -163,18 +163,23 @@ pub(crate) fn supported() -> bool {
     }
 }
 
-/// `x` (all ≥ 0, as after a ReLU) as bytes into `out`: byte = ⌊x / s + ½⌋
-/// with s = max(x) / 255. Returns s (1 for an all-zero input). AVX-512 where
-/// the CPU has it (the same bytes as the scalar loop).
-pub(crate) fn quantize(x: &[f32], out: &mut Vec<u8>) -> f32 {
-    out.clear();
-    out.resize(x.len(), 0);
+/// `x` (all ≥ 0, as after a ReLU) as bytes: byte = ⌊x / s + ½⌋ with
+/// s = max(x) / 255. Returns the bytes (the first `x.len()` of `buffer`,
+/// which only grows: no zero fill per call) and s (1 for an all-zero input).
+/// AVX-512 where the CPU has it (the same bytes as the scalar loop).
+pub(crate) fn quantize<'a>(x: &[f32], buffer: &'a mut Vec<u8>) -> (&'a [u8], f32) {
+    if buffer.len() < x.len() {
+        buffer.resize(x.len(), 0);
+    }
+    let out = &mut buffer[..x.len()];
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the feature was detected.
-        return unsafe { quantize_avx512(x, out) };
+        let scale = unsafe { quantize_avx512(x, out) };
+        return (out, scale);
     }
-    quantize_scalar(x, out)
+    let scale = quantize_scalar(x, out);
+    (out, scale)
 }
 
 fn quantize_scalar(x: &[f32], out: &mut [u8]) -> f32 {
@@ -502,10 +507,10 @@ mod tests {
                 let mut want = start.clone();
                 f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
                 let mut got = start.clone();
-                let mut xq = Vec::new();
-                let sx = quantize(&x, &mut xq);
+                let mut buffer = Vec::new();
+                let (xq, sx) = quantize(&x, &mut buffer);
                 // SAFETY: supported() checked the features.
-                unsafe { q.run(&xq, sx, n, &mut got, accumulate, relu, None) };
+                unsafe { q.run(xq, sx, n, &mut got, accumulate, relu, None) };
                 let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
                 let worst = want
                     .iter()
@@ -594,22 +599,21 @@ mod tests {
     #[test]
     fn quantize_maps_zero_to_zero_the_maximum_to_255_and_rounds() {
         let x = [0.0, 1.0, 0.5, 2.0, 0.013, 1.999];
-        let mut q = Vec::new();
-        let s = quantize(&x, &mut q);
+        let mut buffer = Vec::new();
+        let (q, s) = quantize(&x, &mut buffer);
         assert!((s - 2.0 / 255.0).abs() < 1e-9);
         assert_eq!((q[0], q[3]), (0, 255));
-        for (&v, &b) in x.iter().zip(&q) {
+        for (&v, &b) in x.iter().zip(q) {
             assert!((b as f32 * s - v).abs() <= 0.5001 * s, "{v} -> {b}");
         }
-        assert_eq!(quantize(&[0.0; 4], &mut q), 1.0);
-        assert_eq!(q, vec![0; 4]);
+        // a shorter input reuses the buffer: only its own bytes count
+        assert_eq!(quantize(&[0.0; 4], &mut buffer), (&[0u8; 4][..], 1.0));
         // the vector path (where the CPU has it) gives the scalar loop's bytes
         let long: Vec<f32> = (0..1000)
             .map(|i| ((i * 7919) % 1013) as f32 * 0.037)
             .collect();
         let mut scalar = vec![0; long.len()];
         let s_scalar = quantize_scalar(&long, &mut scalar);
-        assert_eq!(quantize(&long, &mut q), s_scalar);
-        assert_eq!(q, scalar);
+        assert_eq!(quantize(&long, &mut buffer), (&scalar[..], s_scalar));
     }
 }

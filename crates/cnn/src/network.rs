@@ -438,14 +438,14 @@ impl Cnn {
                 match &b.int8 {
                     #[cfg(target_arch = "x86_64")]
                     Some((qa, qb)) if self.int8 => {
-                        let sx = conv_int8::quantize(x, &mut s.quantized);
+                        let (xq, sx) = conv_int8::quantize(x, &mut s.quantized);
                         // SAFETY: `set_precision` enables int8 only where
                         // `conv_int8::supported()`.
-                        unsafe { qa.run(&s.quantized, sx, n, t, false, true, region_a) };
+                        unsafe { qa.run(xq, sx, n, t, false, true, region_a) };
                         lap(3 + 3 * bi, &mut profile);
-                        let st = conv_int8::quantize(t, &mut s.quantized);
+                        let (tq, st) = conv_int8::quantize(t, &mut s.quantized);
                         // SAFETY: as above.
-                        unsafe { qb.run(&s.quantized, st, m, y, true, true, region_b) };
+                        unsafe { qb.run(tq, st, m, y, true, true, region_b) };
                     }
                     _ => {
                         b.a.run(lv, x, n, t, false, true, region_a);
