@@ -90,59 +90,29 @@ impl Int8Conv {
         debug_assert_eq!(input.len(), n * n * n * self.cin);
         // V vectors of 16 output channels, S accumulator sets: eight i32
         // chains in flight whatever the channel count
+        macro_rules! go {
+            ($v:literal, $s:literal, $paired:literal) => {
+                dense_vnni::<$v, $s, $paired>(
+                    self,
+                    input,
+                    input_scale,
+                    n,
+                    out,
+                    accumulate,
+                    relu,
+                    region,
+                )
+            };
+        }
         // SAFETY: the caller checked the features.
         unsafe {
             match self.cout {
-                16 => dense_vnni::<1, 8, true>(
-                    self,
-                    input,
-                    input_scale,
-                    n,
-                    out,
-                    accumulate,
-                    relu,
-                    region,
-                ),
-                32 => dense_vnni::<2, 4, true>(
-                    self,
-                    input,
-                    input_scale,
-                    n,
-                    out,
-                    accumulate,
-                    relu,
-                    region,
-                ),
-                64 => dense_vnni::<4, 2, true>(
-                    self,
-                    input,
-                    input_scale,
-                    n,
-                    out,
-                    accumulate,
-                    relu,
-                    region,
-                ),
-                128 => dense_vnni::<8, 1, false>(
-                    self,
-                    input,
-                    input_scale,
-                    n,
-                    out,
-                    accumulate,
-                    relu,
-                    region,
-                ),
-                256 => dense_vnni::<16, 1, false>(
-                    self,
-                    input,
-                    input_scale,
-                    n,
-                    out,
-                    accumulate,
-                    relu,
-                    region,
-                ),
+                // pairs of output cubes where a weight load feeds few instructions
+                16 => go!(1, 8, true),
+                32 => go!(2, 4, true),
+                64 => go!(4, 2, true),
+                128 => go!(8, 1, false),
+                256 => go!(16, 1, false),
                 c => unreachable!("{c} output channels rejected by Int8Conv::new"),
             }
         }
