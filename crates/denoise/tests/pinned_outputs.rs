@@ -11,7 +11,7 @@
 //! outputs move by ≤ 3e-7), and this small noisy input, where the vertex
 //! update's fold guard decides faces at the margin, turns that into
 //! coordinate sums 1e-3 apart after 10 iterations: both forms are pinned,
-//! the row form where it runs (AVX-512F and FMA), the scatter elsewhere (with
+//! the row form where the engine runs it (AVX-512), the scatter elsewhere (with
 //! the row form switched off, AVX-512 gives the old sums bit for bit).
 
 use normalnet_denoise::{Denoiser, Params};
@@ -87,14 +87,11 @@ const NORMALNET_ROW_STEM_SUMS: [f64; 4] = [
     121.31605781773045,
 ];
 
-/// Whether the lite stem runs as row convolutions on this CPU.
+/// Whether the shipped networks run their stem as row convolutions on this
+/// CPU (the engine's own choice, not a copy of its feature checks).
 fn row_stem() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("fma")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    false
+    let mut bundle = normalnet_net::embedded::lite().unwrap();
+    bundle.engines[0].set_row_stem(true)
 }
 
 #[test]
