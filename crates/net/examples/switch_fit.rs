@@ -3,7 +3,8 @@
 //! `manifest.toml`.
 //!
 //! `cargo run --release -p normalnet-net --example switch_fit -- OUT.toml NOTES DATA.bin...`
-//! (env `HIDDEN`, `EPOCHS`, `SEED`).
+//! (env `HIDDEN`, `EPOCHS`, `SEED`, `MAX_ITERATION`: the iteration
+//! feature's clamp, 10).
 
 use normalnet_net::switch::{CANDIDATES, SwitchWeights};
 use normalnet_net::switch_fit::{FitParams, fit};
@@ -33,6 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         hidden: env("HIDDEN", 32),
         epochs: env("EPOCHS", 40),
         seed: env("SEED", 1) as u64,
+        max_iteration: env("MAX_ITERATION", 10),
         ..FitParams::default()
     };
     let t = std::time::Instant::now();

@@ -20,6 +20,10 @@
 //! Env `INT8=1`: the residual blocks in 8-bit integers (the denoiser's
 //! default where the CPU has AVX-512 VNNI); otherwise f32.
 //!
+//! Env `MU_G=X` (default 0.35) and `NV=N` (default 20): the run's μ_g and
+//! vertex iterations (the bench's Table 2 settings run 20–25 iterations at
+//! μ_g 0.3 with N_v 10 or 30).
+//!
 //! Env `AUTO_STOP=DEG` (default 0: all ITERATIONS): stop after an
 //! iteration whose network outputs turned less than DEG on average.
 
@@ -75,7 +79,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let got = bundle.set_precision(normalnet_cnn::Precision::Int8);
         eprintln!("precision: {got:?}");
     }
-    let mu_g = 0.35;
+    let mu_g: f64 = std::env::var("MU_G").map_or(0.35, |s| s.parse().expect("MU_G"));
+    let vertex_iterations: usize = std::env::var("NV").map_or(20, |s| s.parse().expect("NV"));
     let topology = Topology::new(noisy.num_vertices(), &noisy.faces);
     let gt_normals = face_normals(&gt);
     let n = noisy.num_faces();
@@ -167,7 +172,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &topology,
             &filtered,
             &VertexUpdate {
-                iterations: 20,
+                iterations: vertex_iterations,
                 fixed: None,
                 fold_guard: Some(FOLD_GUARD_COS),
             },

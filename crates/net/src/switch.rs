@@ -19,7 +19,7 @@
 //! ∠(guided, GNF), ∠(net, current); mean and largest ∠ between the face's
 //! network normal and its 1-ring's; mean ∠ between the face's current normal
 //! and its 1-ring's; largest 1-ring ∠ of the GNF normals; the iteration k
-//! (clamped to 10); then three per-mesh values: the median of feature 6
+//! (the perceptron clamps it to its `max_iteration`); then three per-mesh values: the median of feature 6
 //! (0-based; a noise level), the median of feature 4, and the fraction of
 //! faces whose feature 5 is below 10° (how much of the mesh is flat).
 
@@ -30,9 +30,16 @@ use normalnet_mesh::{FaceGeometry, Mesh, Topology};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// The iteration feature is clamped to this (the switch is fitted on 10
-/// iterations; later ones look like the 10th).
-pub const MAX_ITERATION_FEATURE: usize = 10;
+/// The iteration feature's place in a feature row.
+pub const ITERATION_FEATURE: usize = 8;
+
+/// The clamp of the iteration feature of switch tables that do not name
+/// one (fitted on 10-iteration runs: later iterations look like the 10th).
+pub const DEFAULT_MAX_ITERATION: usize = 10;
+
+fn default_max_iteration() -> usize {
+    DEFAULT_MAX_ITERATION
+}
 
 /// Features per face.
 pub const NUM_FEATURES: usize = 12;
@@ -63,6 +70,10 @@ pub struct SwitchWeights {
     /// second layer biases (len [`NUM_CANDIDATES`]; a very negative one
     /// rules its candidate out)
     pub b2: Vec<f64>,
+    /// the iteration feature is clamped to this: iterations after it look
+    /// like it (the longest runs the switch was fitted on)
+    #[serde(default = "default_max_iteration")]
+    pub max_iteration: usize,
     /// how it was fitted, in words
     #[serde(default)]
     pub notes: String,
@@ -83,6 +94,9 @@ impl SwitchWeights {
         ];
         if h == 0 {
             return Err("switch: hidden = 0".into());
+        }
+        if self.max_iteration == 0 {
+            return Err("switch: max_iteration = 0".into());
         }
         for (name, got, want) in shapes {
             if got != want {
@@ -107,6 +121,8 @@ impl SwitchWeights {
         for (j, z) in z.iter_mut().enumerate() {
             *z = (x[j] - self.mean[j]) / self.std[j];
         }
+        let k = x[ITERATION_FEATURE].min(self.max_iteration as f64);
+        z[ITERATION_FEATURE] = (k - self.mean[ITERATION_FEATURE]) / self.std[ITERATION_FEATURE];
         let hidden: Vec<f64> = self
             .w1
             .chunks_exact(NUM_FEATURES)
@@ -221,7 +237,7 @@ pub fn features(topology: &Topology, c: &Candidates, k: usize) -> Vec<[f64; NUM_
                 net_max,
                 current_mean,
                 gnf_max,
-                k.min(MAX_ITERATION_FEATURE) as f64,
+                k as f64,
                 0.0,
                 0.0,
                 0.0,
@@ -293,6 +309,7 @@ pub(crate) mod tests {
             b1: vec![0.0; 2],
             w2: vec![0.0; 2 * NUM_CANDIDATES],
             b2,
+            max_iteration: DEFAULT_MAX_ITERATION,
             notes: String::new(),
         }
     }
@@ -314,6 +331,31 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn the_iteration_is_clamped_to_the_switch_s_longest_run() {
+        let mut w = constant(0);
+        w.b2 = vec![0.0; NUM_CANDIDATES];
+        w.w2[0] = 1.0; // candidate 0 reads hidden unit 0, which reads k
+        w.w1 = vec![0.0; 2 * NUM_FEATURES];
+        w.w1[ITERATION_FEATURE] = 0.1;
+        let at = |w: &SwitchWeights, k: f64| {
+            let mut x = [0.0; NUM_FEATURES];
+            x[ITERATION_FEATURE] = k;
+            w.probabilities(&x)[0]
+        };
+        assert!(at(&w, 9.0) < at(&w, 10.0));
+        assert_eq!(at(&w, 10.0), at(&w, 25.0));
+        w.max_iteration = 25;
+        assert!(at(&w, 10.0) < at(&w, 25.0));
+        assert_eq!(at(&w, 25.0), at(&w, 40.0));
+        // tables written before the clamp was a field read as 10
+        let text = toml::to_string(&constant(1)).unwrap();
+        let text = text.replace("max_iteration = 10\n", "");
+        assert!(!text.contains("max_iteration"));
+        let back: SwitchWeights = toml::from_str(&text).unwrap();
+        assert_eq!(back.max_iteration, DEFAULT_MAX_ITERATION);
+    }
+
+    #[test]
     fn validate_names_the_bad_part() {
         assert!(constant(1).validate().is_ok());
         let mut w = constant(1);
@@ -325,6 +367,9 @@ pub(crate) mod tests {
         let mut w = constant(1);
         w.std[0] = 0.0;
         assert!(w.validate().unwrap_err().contains("std"));
+        let mut w = constant(1);
+        w.max_iteration = 0;
+        assert!(w.validate().unwrap_err().contains("max_iteration"));
     }
 
     #[test]

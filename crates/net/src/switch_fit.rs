@@ -12,7 +12,9 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use crate::switch::{NUM_CANDIDATES, NUM_FEATURES, SwitchWeights};
+use crate::switch::{
+    DEFAULT_MAX_ITERATION, ITERATION_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchWeights,
+};
 
 /// One training row: features, then each candidate's angle to the ground
 /// truth in radians (the layout of the dump files).
@@ -31,6 +33,9 @@ pub struct FitParams {
     pub learning_rate: f64,
     /// shuffling and initialisation
     pub seed: u64,
+    /// the iteration feature is clamped to this (10; the longest runs
+    /// among the rows)
+    pub max_iteration: usize,
 }
 
 impl Default for FitParams {
@@ -41,6 +46,7 @@ impl Default for FitParams {
             batch: 4096,
             learning_rate: 3e-3,
             seed: 1,
+            max_iteration: DEFAULT_MAX_ITERATION,
         }
     }
 }
@@ -147,18 +153,27 @@ pub fn fit(
     if allowed.is_empty() || allowed.iter().any(|&c| c >= NUM_CANDIDATES) {
         return Err(format!("allowed candidates {allowed:?}"));
     }
+    if params.max_iteration == 0 {
+        return Err("max_iteration = 0".into());
+    }
     let n = rows.len() / ROW_LEN;
+    // the features as the switch reads them (the iteration clamped)
+    let k_max = params.max_iteration as f64;
+    let feature = |j: usize, x: f32| {
+        let x = f64::from(x);
+        if j == ITERATION_FEATURE { x.min(k_max) } else { x }
+    };
     // feature standardisation
     let mut mean = vec![0.0; NUM_FEATURES];
     let mut var = [0.0; NUM_FEATURES];
     for r in rows.chunks_exact(ROW_LEN) {
-        for (m, x) in mean.iter_mut().zip(r) {
-            *m += f64::from(*x) / n as f64;
+        for (j, (m, x)) in mean.iter_mut().zip(r).enumerate() {
+            *m += feature(j, *x) / n as f64;
         }
     }
     for r in rows.chunks_exact(ROW_LEN) {
-        for ((v, m), x) in var.iter_mut().zip(&mean).zip(r) {
-            *v += (f64::from(*x) - m).powi(2) / n as f64;
+        for (j, ((v, m), x)) in var.iter_mut().zip(&mean).zip(r).enumerate() {
+            *v += (feature(j, *x) - m).powi(2) / n as f64;
         }
     }
     // a (nearly) constant feature is left unscaled rather than blown up
@@ -173,7 +188,8 @@ pub fn fit(
                 .iter()
                 .zip(&mean)
                 .zip(&std)
-                .map(|((x, m), s)| (f64::from(*x) - m) / s)
+                .enumerate()
+                .map(|(j, ((x, m), s))| (feature(j, *x) - m) / s)
         })
         .collect();
     let e: Vec<f64> = rows
@@ -293,6 +309,7 @@ pub fn fit(
         b1: b1.to_vec(),
         w2: w2.to_vec(),
         b2: b2.to_vec(),
+        max_iteration: params.max_iteration,
         notes: String::new(),
     };
     weights.validate()?;
