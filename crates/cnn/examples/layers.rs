@@ -1,5 +1,5 @@
 //! Microseconds per sample in every layer, one thread, f32 and int8 residual
-//! blocks, the stem as scatter and as row convolutions, on sheet-like grids of a random `lite` (or `paper`) network:
+//! blocks, the stem as scatter and as row convolutions (f32 or int8), on sheet-like grids of a random `lite` (or `paper`) network:
 //! `cargo run --release -p normalnet-cnn --example layers -- [lite|paper] [samples]`.
 #![allow(missing_docs)]
 
@@ -22,12 +22,13 @@ fn main() {
         .collect();
     let mut out = vec![0.0f32; samples * 18];
     let forms = [
-        (Precision::F32, false),
-        (Precision::F32, true),
-        (Precision::Int8, false),
-        (Precision::Int8, true),
+        (Precision::F32, false, false),
+        (Precision::F32, true, false),
+        (Precision::Int8, false, false),
+        (Precision::Int8, true, false),
+        (Precision::Int8, true, true),
     ];
-    for (precision, rows) in forms {
+    for (precision, rows, int8_stem) in forms {
         if cnn.set_precision(precision) != precision {
             println!("{precision:?}: not available on this CPU");
             continue;
@@ -36,7 +37,15 @@ fn main() {
             println!("row stem: not available for this network or CPU");
             continue;
         }
-        let stem = if rows { "row stem" } else { "scatter stem" };
+        if cnn.set_int8_stem(int8_stem) != int8_stem {
+            println!("int8 row stem: not available for this network or CPU");
+            continue;
+        }
+        let stem = match (rows, int8_stem) {
+            (true, true) => "int8 row stem",
+            (true, false) => "row stem",
+            _ => "scatter stem",
+        };
         cnn.forward_profiled(&grids, &mut out).expect("warm-up");
         let times = cnn.forward_profiled(&grids, &mut out).expect("forward");
         let mut total = 0.0;

@@ -39,6 +39,10 @@ pub(crate) struct Rows {
     /// per non-empty row: bit `ow` set where output cube `ow` of an output
     /// row it feeds has an occupied cube of this row in its W window
     reaches: Vec<u64>,
+    /// per non-empty row, for [`run_int8`] (after [`Rows::quantize`]):
+    /// `len` cubes of four bytes, channel value / scale + 128 (the fourth
+    /// byte 128; empty and padding cubes all 128)
+    bytes: Vec<u32>,
     len: usize,
 }
 
@@ -74,6 +78,75 @@ impl Rows {
     }
 }
 
+impl Rows {
+    /// The rows in bytes for [`run_int8`]; returns the scale s (value ≈
+    /// (byte − 128) · s, s = largest |value| / 127, 1 for an all-zero grid).
+    pub(crate) fn quantize(&mut self) -> f32 {
+        let max = self.values.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        let scale = if max > 0.0 { max / 127.0 } else { 1.0 };
+        let inv = 1.0 / scale;
+        let byte = |v: f32| ((v * inv).round().clamp(-127.0, 127.0) as i32 + 128) as u32;
+        self.bytes.clear();
+        self.bytes.extend(
+            self.values
+                .chunks_exact(CIN)
+                .map(|c| byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 128 << 24),
+        );
+        scale
+    }
+}
+
+/// The stem's weights in signed bytes for [`run_int8`]: per tap `[16 co][4]`
+/// (three input channels and a zero), one scale per output channel.
+#[derive(Clone, Debug)]
+pub(crate) struct Int8Stem {
+    /// `[(kd·K + kh)·K + kw][co][4]`
+    w: Vec<i8>,
+    /// per output channel: f32 weight = byte · scale
+    scale: Vec<f32>,
+    /// per (kd, kh) and output channel: 128 · Σ over kw and channels of the
+    /// bytes — what the +128 offset of the inputs adds to a sum over one row
+    offset: Vec<i32>,
+    bias: Vec<f32>,
+}
+
+impl Int8Stem {
+    /// Quantizes the stem `c`; `None` where [`run`] does not serve it.
+    pub(crate) fn new(c: &FoldedConv) -> Option<Int8Stem> {
+        if c.k != K || c.cin != CIN || c.cout != CO || c.stride != 1 {
+            return None;
+        }
+        let taps = K * K * K;
+        let scale: Vec<f32> = (0..CO)
+            .map(|co| {
+                let max = (0..taps * CIN)
+                    .map(|r| c.w[r * CO + co].abs())
+                    .fold(0.0f32, f32::max);
+                if max > 0.0 { max / 127.0 } else { 1.0 }
+            })
+            .collect();
+        let mut w = vec![0i8; taps * CO * 4];
+        let mut offset = vec![0i32; K * K * CO];
+        for tap in 0..taps {
+            for ci in 0..CIN {
+                for co in 0..CO {
+                    let q = (c.w[(tap * CIN + ci) * CO + co] / scale[co])
+                        .round()
+                        .clamp(-127.0, 127.0) as i8;
+                    w[(tap * CO + co) * 4 + ci] = q;
+                    offset[tap / K * CO + co] += 128 * i32::from(q);
+                }
+            }
+        }
+        Some(Int8Stem {
+            w,
+            scale,
+            offset,
+            bias: c.b.clone(),
+        })
+    }
+}
+
 /// Bits `0..m` set.
 fn output_bits(m: usize) -> u64 {
     if m == 64 { u64::MAX } else { (1u64 << m) - 1 }
@@ -83,6 +156,49 @@ fn output_bits(m: usize) -> u64 {
 pub(crate) fn serves(c: &FoldedConv, n: usize) -> bool {
     // bit sets of u64: every input cube's W window bits below 64
     c.k == K && c.cin == CIN && c.cout == CO && c.stride == 1 && c.pad < K && n + c.pad + K <= 64
+}
+
+/// The non-empty input rows that reach output row (`od`, `oh`) as (first
+/// cube of the row in the row buffers, (kd, kh) tap row `kd·K + kh`, the
+/// output cubes it reaches); returns all those cubes' bits.
+#[inline(always)]
+fn reaching_rows(
+    rows: &Rows,
+    n: usize,
+    p: usize,
+    (od, oh): (usize, usize),
+    reach: &mut Vec<(usize, usize, u64)>,
+) -> u64 {
+    reach.clear();
+    let mut reached = 0u64;
+    // input depth id = od + kd − p, height ih = oh + kh − p
+    for kd in 0..K {
+        let Some(id) = (od + kd).checked_sub(p).filter(|&i| i < n) else {
+            continue;
+        };
+        for kh in 0..K {
+            let Some(ih) = (oh + kh).checked_sub(p).filter(|&i| i < n) else {
+                continue;
+            };
+            let slot = rows.slot[id * n + ih];
+            if slot != EMPTY {
+                let outputs = rows.reaches[slot as usize];
+                reached |= outputs;
+                reach.push((slot as usize * rows.len, kd * K + kh, outputs));
+            }
+        }
+    }
+    reached
+}
+
+/// Marks in `near` the output cubes of row `first..first + m` whose bit is
+/// set in `reached`.
+fn mark_near(near: Option<&mut Vec<bool>>, first: usize, m: usize, reached: u64) {
+    if let Some(near) = near {
+        for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
+            *flag = reached >> ow & 1 == 1;
+        }
+    }
 }
 
 /// `out = [relu](conv(grid))`, `out` `[m, m, m, 16]` channels-last, from the
@@ -118,31 +234,12 @@ pub(crate) unsafe fn run(
         _mm512_set1_ps(f32::NEG_INFINITY)
     };
     let background = _mm512_max_ps(bias, floor);
-    // (first value of the input row, first weight of its (kd, kh) taps,
-    // the output cubes it reaches)
+    // (first cube of the input row, its (kd, kh) tap row, the output cubes
+    // it reaches)
     let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
     for od in 0..m {
         for oh in 0..m {
-            reach.clear();
-            let mut reached = 0u64;
-            // input depth id = od + kd − p, height ih = oh + kh − p
-            for kd in 0..K {
-                let Some(id) = (od + kd).checked_sub(p).filter(|&i| i < n) else {
-                    continue;
-                };
-                for kh in 0..K {
-                    let Some(ih) = (oh + kh).checked_sub(p).filter(|&i| i < n) else {
-                        continue;
-                    };
-                    let slot = rows.slot[id * n + ih];
-                    if slot != EMPTY {
-                        let outputs = rows.reaches[slot as usize];
-                        reached |= outputs;
-                        let x0 = slot as usize * rows.len * CIN;
-                        reach.push((x0, (kd * K + kh) * K * CIN * CO, outputs));
-                    }
-                }
-            }
+            let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
             let dst = &mut out[(od * m + oh) * m * CO..(od * m + oh + 1) * m * CO];
             if reach.is_empty() {
                 for cube in dst.chunks_exact_mut(CO) {
@@ -151,26 +248,21 @@ pub(crate) unsafe fn run(
                 }
                 continue;
             }
-            if let Some(near) = near.as_deref_mut() {
-                let first = (od * m + oh) * m;
-                for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
-                    *flag = reached >> ow & 1 == 1;
-                }
-            }
+            mark_near(near.as_deref_mut(), (od * m + oh) * m, m, reached);
             for c0 in (0..m).step_by(CHUNK) {
                 let mut acc = [bias; CHUNK];
                 let chunk = ((1u64 << CHUNK) - 1) << c0;
                 // rows with no occupied cube near this block add only zeros
-                for &(x0, w0, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
-                    // SAFETY: `w0 + K·CIN·CO ≤ c.w.len()` (taps of one
-                    // (kd, kh)), and `x0 + (c0 + CHUNK + K − 1)·CIN ≤
+                for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
+                    // SAFETY: `(tap_row + 1)·K·CIN·CO ≤ c.w.len()` (taps of
+                    // one (kd, kh)), and `(x0 + c0 + CHUNK + K − 1)·CIN ≤
                     // rows.values.len()` (`c0 < m`, rows of `len` cubes).
                     unsafe {
-                        let w = c.w.as_ptr().add(w0);
+                        let w = c.w.as_ptr().add(tap_row * K * CIN * CO);
                         let wr: [[__m512; CIN]; K] = std::array::from_fn(|kw| {
                             std::array::from_fn(|ci| _mm512_loadu_ps(w.add((kw * CIN + ci) * CO)))
                         });
-                        let x = rows.values.as_ptr().add(x0 + c0 * CIN);
+                        let x = rows.values.as_ptr().add((x0 + c0) * CIN);
                         // output cube c0 + o reads padded inputs c0 + o + kw;
                         // input j spelled out (a loop over it is not unrolled,
                         // and `acc` would live on the stack)
@@ -200,11 +292,154 @@ pub(crate) unsafe fn run(
     }
 }
 
+/// As [`run`] with the stem's multiply-adds in 8-bit integers (AVX-512
+/// VNNI: four input channels per `vpdpbusd` lane, so one instruction per
+/// input cube and tap where f32 takes three FMAs), on rows quantized by
+/// [`Rows::quantize`] with scale `input_scale`. The inputs are signed, so
+/// they are offset by 128 into unsigned bytes and the offset's share of each
+/// sum ([`Int8Stem`]'s `offset`, per tap row taken) is subtracted again: the
+/// i32 sums are exact, the error is the rounding of inputs and weights.
+///
+/// # Safety
+/// The CPU must have AVX-512 F, BW and VNNI, and `serves(c, n)` must hold
+/// for the stem `q` was made from.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn run_int8(
+    q: &Int8Stem,
+    p: usize,
+    rows: &Rows,
+    input_scale: f32,
+    n: usize,
+    out: &mut [f32],
+    relu: bool,
+    mut near: Option<&mut Vec<bool>>,
+) {
+    use std::arch::x86_64::*;
+    let m = crate::conv::output_side(n, K, 1, p);
+    assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
+    assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
+    assert!(
+        rows.bytes.len() == rows.values.len() / CIN,
+        "rows not quantized"
+    );
+    if let Some(near) = near.as_deref_mut() {
+        near.clear();
+        near.resize(m * m * m, false);
+    }
+    // SAFETY: 16 output channels: 16 biases and scales.
+    let (bias, scale) = unsafe {
+        let s = _mm512_loadu_ps(q.scale.as_ptr());
+        (
+            _mm512_loadu_ps(q.bias.as_ptr()),
+            _mm512_mul_ps(s, _mm512_set1_ps(input_scale)),
+        )
+    };
+    let floor = if relu {
+        _mm512_setzero_ps()
+    } else {
+        _mm512_set1_ps(f32::NEG_INFINITY)
+    };
+    let background = _mm512_max_ps(bias, floor);
+    let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
+    for od in 0..m {
+        for oh in 0..m {
+            let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
+            let dst = &mut out[(od * m + oh) * m * CO..(od * m + oh + 1) * m * CO];
+            if reach.is_empty() {
+                for cube in dst.chunks_exact_mut(CO) {
+                    // SAFETY: `cube` holds 16 floats.
+                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), background) };
+                }
+                continue;
+            }
+            mark_near(near.as_deref_mut(), (od * m + oh) * m, m, reached);
+            for c0 in (0..m).step_by(CHUNK) {
+                let mut acc = [_mm512_setzero_si512(); CHUNK];
+                let mut offset = _mm512_setzero_si512();
+                let chunk = ((1u64 << CHUNK) - 1) << c0;
+                for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
+                    // SAFETY: `(tap_row + 1)·K·CO·4 ≤ q.w.len()` and
+                    // `(tap_row + 1)·CO ≤ q.offset.len()` (one (kd, kh)), and
+                    // `x0 + c0 + CHUNK + K − 1 ≤ rows.bytes.len()` (`c0 < m`,
+                    // rows of `len` cubes).
+                    unsafe {
+                        let w = q.w.as_ptr().add(tap_row * K * CO * 4);
+                        let wr: [__m512i; K] =
+                            std::array::from_fn(|kw| _mm512_loadu_si512(w.add(kw * CO * 4).cast()));
+                        offset = _mm512_add_epi32(
+                            offset,
+                            _mm512_loadu_si512(q.offset.as_ptr().add(tap_row * CO).cast()),
+                        );
+                        let x = rows.bytes.as_ptr().add(x0 + c0);
+                        macro_rules! input {
+                            ($($j:literal)*) => {$(
+                                let v = _mm512_set1_epi32(*x.add($j) as i32);
+                                for (kw, wk) in wr.iter().enumerate() {
+                                    if $j >= kw && $j - kw < CHUNK {
+                                        acc[$j - kw] = _mm512_dpbusd_epi32(acc[$j - kw], v, *wk);
+                                    }
+                                }
+                            )*};
+                        }
+                        const _: () = assert!(CHUNK + K - 1 == 11);
+                        input!(0 1 2 3 4 5 6 7 8 9 10);
+                    }
+                }
+                for (o, a) in acc.iter().enumerate().take(m - c0) {
+                    let sum = _mm512_cvtepi32_ps(_mm512_sub_epi32(*a, offset));
+                    let v = _mm512_max_ps(_mm512_fmadd_ps(sum, scale, bias), floor);
+                    let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
+                    // SAFETY: `cube` holds 16 floats.
+                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), v) };
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::conv::Level;
     use crate::weights::{BatchNormWeights, ConvWeights};
+
+    /// A random stem and a grid of side `n` with a sheet, scattered cubes
+    /// and cubes at the borders, as occupied cubes.
+    fn stem_and_grid(n: usize) -> (FoldedConv, Occupied) {
+        let mut state = 5u32 + n as u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        };
+        let conv = ConvWeights {
+            in_channels: 3,
+            out_channels: 16,
+            kernel: 5,
+            stride: 1,
+            padding: 2,
+            weight: (0..16 * 3 * 125).map(|_| next()).collect(),
+            bias: Some((0..16).map(|_| next()).collect()),
+        };
+        let c = FoldedConv::new(&conv, &BatchNormWeights::identity(16));
+        let cubes = n * n * n;
+        let mut grid = vec![0.0f32; 3 * cubes];
+        for i in 0..cubes {
+            let (h, w) = ((i / n) % n, i % n);
+            if h == n / 2 || i % 11 == 0 || i == cubes - 1 || (h == 0 && w == n - 1) {
+                for ch in 0..3 {
+                    grid[ch * cubes + i] = next();
+                }
+            }
+        }
+        let mut occ = Occupied::default();
+        occ.gather(&grid, 3);
+        (c, occ)
+    }
+
+    /// Sides around multiples of CHUNK.
+    const SIDES: [usize; 4] = [6, 7, 9, 15];
 
     #[test]
     #[cfg(target_arch = "x86_64")]
@@ -213,35 +448,8 @@ mod tests {
             eprintln!("skipped: no AVX-512F on this CPU");
             return;
         }
-        let mut state = 5u32;
-        let mut next = || {
-            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (state >> 8) as f32 / (1u32 << 24) as f32 - 0.5
-        };
-        // sides around multiples of CHUNK; a sheet, scattered cubes, borders
-        for n in [6, 7, 9, 15] {
-            let conv = ConvWeights {
-                in_channels: 3,
-                out_channels: 16,
-                kernel: 5,
-                stride: 1,
-                padding: 2,
-                weight: (0..16 * 3 * 125).map(|_| next()).collect(),
-                bias: Some((0..16).map(|_| next()).collect()),
-            };
-            let c = FoldedConv::new(&conv, &BatchNormWeights::identity(16));
-            let cubes = n * n * n;
-            let mut grid = vec![0.0f32; 3 * cubes];
-            for i in 0..cubes {
-                let (h, w) = ((i / n) % n, i % n);
-                if h == n / 2 || i % 11 == 0 || i == cubes - 1 || (h == 0 && w == n - 1) {
-                    for ch in 0..3 {
-                        grid[ch * cubes + i] = next();
-                    }
-                }
-            }
-            let mut occ = Occupied::default();
-            occ.gather(&grid, 3);
+        for n in SIDES {
+            let (c, occ) = stem_and_grid(n);
             let m = c.output_side(n);
             let mut rows = Rows::default();
             rows.build(&occ, n, c.pad, m);
@@ -260,6 +468,67 @@ mod tests {
                 for (g, w) in got.iter().zip(&want) {
                     assert!((g - w).abs() < 1e-5, "n {n}: {g} vs {w}");
                 }
+            }
+        }
+    }
+
+    /// The int8 stem computes exactly the f32 stem of its rounded inputs and
+    /// weights (up to f32 rounding), and is near the f32 stem itself.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn int8_rows_equal_the_rows_of_the_rounded_values() {
+        if !crate::conv_int8::supported() {
+            eprintln!("skipped: no AVX-512 VNNI on this CPU");
+            return;
+        }
+        for n in SIDES {
+            let (c, occ) = stem_and_grid(n);
+            let m = c.output_side(n);
+            let mut rows = Rows::default();
+            rows.build(&occ, n, c.pad, m);
+            let s = rows.quantize();
+            let q = Int8Stem::new(&c).expect("a 3 → 16 stem");
+            // the values the bytes stand for
+            let mut rounded = c.clone();
+            for (r, w) in rounded.w.iter_mut().enumerate() {
+                let (tap, ci, co) = (r / (CIN * CO), r / CO % CIN, r % CO);
+                *w = f32::from(q.w[(tap * CO + co) * 4 + ci]) * q.scale[co];
+            }
+            let mut rounded_occ = Occupied {
+                index: occ.index.clone(),
+                values: occ.values.clone(),
+            };
+            for v in &mut rounded_occ.values {
+                *v = (*v / s).round() * s;
+            }
+            let mut rounded_rows = Rows::default();
+            rounded_rows.build(&rounded_occ, n, c.pad, m);
+            for relu in [false, true] {
+                let mut want = vec![f32::NAN; m * m * m * 16];
+                let mut exact = vec![f32::NAN; m * m * m * 16];
+                let mut got = vec![f32::NAN; m * m * m * 16];
+                let (mut want_near, mut near) = (Vec::new(), vec![true; 3]);
+                // SAFETY: VNNI (with F and BW) detected above; `serves` holds.
+                unsafe {
+                    run(
+                        &rounded,
+                        &rounded_rows,
+                        n,
+                        &mut want,
+                        relu,
+                        Some(&mut want_near),
+                    );
+                    run(&c, &rows, n, &mut exact, relu, None);
+                    run_int8(&q, c.pad, &rows, s, n, &mut got, relu, Some(&mut near));
+                }
+                assert_eq!(near, want_near, "n {n}: near cubes");
+                let mut worst = 0.0f32;
+                for ((g, w), e) in got.iter().zip(&want).zip(&exact) {
+                    assert!((g - w).abs() < 1e-5, "n {n}: {g} vs {w}");
+                    worst = worst.max((g - e).abs());
+                }
+                // inputs in ±0.5, weights in ±0.5, up to 375 products
+                assert!(worst > 0.0 && worst < 0.05, "n {n}: int8 vs f32 {worst}");
             }
         }
     }

@@ -184,3 +184,38 @@ fn the_row_stem_equals_the_scatter() {
     println!("row stem vs scatter: largest output difference {worst:e}");
     assert!(worst < 1e-5, "row stem off by {worst}");
 }
+
+#[test]
+fn the_int8_stem_is_opt_in_and_near_the_reference() {
+    let (grid, batch) = (21, 6);
+    let w = common::random_net(5, grid, [16, 32, 64]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    assert!(!cnn.set_int8_stem(true), "not with f32 precision");
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(700 + i as u64, grid))
+        .collect();
+    if cnn.set_precision(Precision::Int8) != Precision::Int8 || !cnn.set_row_stem(true) {
+        eprintln!("no AVX-512 VNNI on this CPU: no int8 stem (checked), rest skipped");
+        assert!(!cnn.set_int8_stem(true));
+        return;
+    }
+    let mut blocks = vec![0.0f32; batch * 18];
+    assert!(!cnn.set_int8_stem(false));
+    cnn.forward(&grids, &mut blocks).unwrap();
+    let mut out = vec![0.0f32; batch * 18];
+    assert!(cnn.set_int8_stem(true));
+    cnn.forward(&grids, &mut out).unwrap();
+    assert_ne!(out, blocks, "the int8 stem did not run");
+    let mut worst = 0.0f64;
+    for b in 0..batch {
+        let expected =
+            common::reference_forward(&w, &grids[b * cnn.grid_len()..(b + 1) * cnn.grid_len()]);
+        for (&got, &want) in out[b * 18..(b + 1) * 18].iter().zip(&expected) {
+            worst = worst.max((got as f64 - want).abs());
+        }
+    }
+    println!("int8 with the int8 stem vs f64: largest output difference {worst:e}");
+    assert!(worst < INT8_TOLERANCE, "int8 stem off by {worst}");
+    // the row stem off: the scatter stem in f32
+    assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
+}

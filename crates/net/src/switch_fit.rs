@@ -161,7 +161,11 @@ pub fn fit(
     let k_max = params.max_iteration as f64;
     let feature = |j: usize, x: f32| {
         let x = f64::from(x);
-        if j == ITERATION_FEATURE { x.min(k_max) } else { x }
+        if j == ITERATION_FEATURE {
+            x.min(k_max)
+        } else {
+            x
+        }
     };
     // feature standardisation
     let mut mean = vec![0.0; NUM_FEATURES];
