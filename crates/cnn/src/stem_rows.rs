@@ -191,14 +191,70 @@ fn reaching_rows(
     reached
 }
 
-/// Marks in `near` the output cubes of row `first..first + m` whose bit is
-/// set in `reached`.
-fn mark_near(near: Option<&mut Vec<bool>>, first: usize, m: usize, reached: u64) {
-    if let Some(near) = near {
-        for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
-            *flag = reached >> ow & 1 == 1;
+/// The row loops both stems share: for every output row (od, oh) the input
+/// rows that reach it; an output row no input row reaches gets `background`
+/// in every cube; otherwise `block(c0, chunk, reach, dst)` computes output
+/// cubes `c0..c0 + CHUNK` (bits `chunk`) of the row `dst` from `reach`.
+/// With `near`, also the output cubes whose window holds an occupied cube.
+#[inline(always)]
+fn for_each_block(
+    rows: &Rows,
+    [n, p, m]: [usize; 3],
+    out: &mut [f32],
+    background: [f32; CO],
+    mut near: Option<&mut Vec<bool>>,
+    mut block: impl FnMut(usize, u64, &[(usize, usize, u64)], &mut [f32]),
+) {
+    assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
+    assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
+    if let Some(near) = near.as_deref_mut() {
+        near.clear();
+        near.resize(m * m * m, false);
+    }
+    // (first cube of the input row, its (kd, kh) tap row, the output cubes
+    // it reaches)
+    let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
+    for od in 0..m {
+        for oh in 0..m {
+            let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
+            let first = (od * m + oh) * m;
+            let dst = &mut out[first * CO..(first + m) * CO];
+            if reach.is_empty() {
+                for cube in dst.chunks_exact_mut(CO) {
+                    cube.copy_from_slice(&background);
+                }
+                continue;
+            }
+            if let Some(near) = near.as_deref_mut() {
+                for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
+                    *flag = reached >> ow & 1 == 1;
+                }
+            }
+            for c0 in (0..m).step_by(CHUNK) {
+                block(c0, ((1u64 << CHUNK) - 1) << c0, &reach, dst);
+            }
         }
     }
+}
+
+/// The ReLU's floor (0, or −∞ without it) and `max(bias, floor)` as an
+/// array: the output of a cube no occupied cube reaches.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn floor_and_background(
+    bias: std::arch::x86_64::__m512,
+    relu: bool,
+) -> (std::arch::x86_64::__m512, [f32; CO]) {
+    use std::arch::x86_64::*;
+    let floor = if relu {
+        _mm512_setzero_ps()
+    } else {
+        _mm512_set1_ps(f32::NEG_INFINITY)
+    };
+    let mut out = [0.0f32; CO];
+    // SAFETY: `out` holds 16 floats.
+    unsafe { _mm512_storeu_ps(out.as_mut_ptr(), _mm512_max_ps(bias, floor)) };
+    (floor, out)
 }
 
 /// `out = [relu](conv(grid))`, `out` `[m, m, m, 16]` channels-last, from the
@@ -216,80 +272,53 @@ pub(crate) unsafe fn run(
     n: usize,
     out: &mut [f32],
     relu: bool,
-    mut near: Option<&mut Vec<bool>>,
+    near: Option<&mut Vec<bool>>,
 ) {
     use std::arch::x86_64::*;
     let (p, m) = (c.pad, c.output_side(n));
-    assert!(serves(c, n) && out.len() == m * m * m * CO && rows.slot.len() == n * n);
-    if let Some(near) = near.as_deref_mut() {
-        near.clear();
-        near.resize(m * m * m, false);
-    }
-    assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
+    assert!(serves(c, n));
     // SAFETY: `serves` means 16 output channels, so 16 biases.
     let bias = unsafe { _mm512_loadu_ps(c.b.as_ptr()) };
-    let floor = if relu {
-        _mm512_setzero_ps()
-    } else {
-        _mm512_set1_ps(f32::NEG_INFINITY)
-    };
-    let background = _mm512_max_ps(bias, floor);
-    // (first cube of the input row, its (kd, kh) tap row, the output cubes
-    // it reaches)
-    let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
-    for od in 0..m {
-        for oh in 0..m {
-            let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
-            let dst = &mut out[(od * m + oh) * m * CO..(od * m + oh + 1) * m * CO];
-            if reach.is_empty() {
-                for cube in dst.chunks_exact_mut(CO) {
-                    // SAFETY: `cube` holds 16 floats.
-                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), background) };
-                }
-                continue;
-            }
-            mark_near(near.as_deref_mut(), (od * m + oh) * m, m, reached);
-            for c0 in (0..m).step_by(CHUNK) {
-                let mut acc = [bias; CHUNK];
-                let chunk = ((1u64 << CHUNK) - 1) << c0;
-                // rows with no occupied cube near this block add only zeros
-                for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
-                    // SAFETY: `(tap_row + 1)·K·CIN·CO ≤ c.w.len()` (taps of
-                    // one (kd, kh)), and `(x0 + c0 + CHUNK + K − 1)·CIN ≤
-                    // rows.values.len()` (`c0 < m`, rows of `len` cubes).
-                    unsafe {
-                        let w = c.w.as_ptr().add(tap_row * K * CIN * CO);
-                        let wr: [[__m512; CIN]; K] = std::array::from_fn(|kw| {
-                            std::array::from_fn(|ci| _mm512_loadu_ps(w.add((kw * CIN + ci) * CO)))
-                        });
-                        let x = rows.values.as_ptr().add((x0 + c0) * CIN);
-                        // output cube c0 + o reads padded inputs c0 + o + kw;
-                        // input j spelled out (a loop over it is not unrolled,
-                        // and `acc` would live on the stack)
-                        macro_rules! input {
-                            ($($j:literal)*) => {$(
-                                for ci in 0..CIN {
-                                    let v = _mm512_set1_ps(*x.add($j * CIN + ci));
-                                    for (kw, wk) in wr.iter().enumerate() {
-                                        if $j >= kw && $j - kw < CHUNK {
-                                            acc[$j - kw] = _mm512_fmadd_ps(v, wk[ci], acc[$j - kw]);
-                                        }
-                                    }
+    let (floor, background) = floor_and_background(bias, relu);
+    let block = |c0: usize, chunk: u64, reach: &[(usize, usize, u64)], dst: &mut [f32]| {
+        let mut acc = [bias; CHUNK];
+        // rows with no occupied cube near this block add only zeros
+        for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
+            // SAFETY: `(tap_row + 1)·K·CIN·CO ≤ c.w.len()` (taps of one
+            // (kd, kh)), and `(x0 + c0 + CHUNK + K − 1)·CIN ≤
+            // rows.values.len()` (`c0 < m`, rows of `len` cubes).
+            unsafe {
+                let w = c.w.as_ptr().add(tap_row * K * CIN * CO);
+                let wr: [[__m512; CIN]; K] = std::array::from_fn(|kw| {
+                    std::array::from_fn(|ci| _mm512_loadu_ps(w.add((kw * CIN + ci) * CO)))
+                });
+                let x = rows.values.as_ptr().add((x0 + c0) * CIN);
+                // output cube c0 + o reads padded inputs c0 + o + kw; input
+                // j spelled out (a loop over it is not unrolled, and `acc`
+                // would live on the stack)
+                macro_rules! input {
+                    ($($j:literal)*) => {$(
+                        for ci in 0..CIN {
+                            let v = _mm512_set1_ps(*x.add($j * CIN + ci));
+                            for (kw, wk) in wr.iter().enumerate() {
+                                if $j >= kw && $j - kw < CHUNK {
+                                    acc[$j - kw] = _mm512_fmadd_ps(v, wk[ci], acc[$j - kw]);
                                 }
-                            )*};
+                            }
                         }
-                        const _: () = assert!(CHUNK + K - 1 == 11);
-                        input!(0 1 2 3 4 5 6 7 8 9 10);
-                    }
+                    )*};
                 }
-                for (o, a) in acc.iter().enumerate().take(m - c0) {
-                    let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
-                    // SAFETY: `cube` holds 16 floats.
-                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), _mm512_max_ps(*a, floor)) };
-                }
+                const _: () = assert!(CHUNK + K - 1 == 11);
+                input!(0 1 2 3 4 5 6 7 8 9 10);
             }
         }
-    }
+        for (o, a) in acc.iter().enumerate().take(m - c0) {
+            let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
+            // SAFETY: `cube` holds 16 floats.
+            unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), _mm512_max_ps(*a, floor)) };
+        }
+    };
+    for_each_block(rows, [n, p, m], out, background, near, block);
 }
 
 /// As [`run`] with the stem's multiply-adds in 8-bit integers (AVX-512
@@ -314,20 +343,14 @@ pub(crate) unsafe fn run_int8(
     n: usize,
     out: &mut [f32],
     relu: bool,
-    mut near: Option<&mut Vec<bool>>,
+    near: Option<&mut Vec<bool>>,
 ) {
     use std::arch::x86_64::*;
     let m = crate::conv::output_side(n, K, 1, p);
-    assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
-    assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
     assert!(
         rows.bytes.len() == rows.values.len() / CIN,
         "rows not quantized"
     );
-    if let Some(near) = near.as_deref_mut() {
-        near.clear();
-        near.resize(m * m * m, false);
-    }
     // SAFETY: 16 output channels: 16 biases and scales.
     let (bias, scale) = unsafe {
         let s = _mm512_loadu_ps(q.scale.as_ptr());
@@ -336,67 +359,47 @@ pub(crate) unsafe fn run_int8(
             _mm512_mul_ps(s, _mm512_set1_ps(input_scale)),
         )
     };
-    let floor = if relu {
-        _mm512_setzero_ps()
-    } else {
-        _mm512_set1_ps(f32::NEG_INFINITY)
-    };
-    let background = _mm512_max_ps(bias, floor);
-    let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
-    for od in 0..m {
-        for oh in 0..m {
-            let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
-            let dst = &mut out[(od * m + oh) * m * CO..(od * m + oh + 1) * m * CO];
-            if reach.is_empty() {
-                for cube in dst.chunks_exact_mut(CO) {
-                    // SAFETY: `cube` holds 16 floats.
-                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), background) };
-                }
-                continue;
-            }
-            mark_near(near.as_deref_mut(), (od * m + oh) * m, m, reached);
-            for c0 in (0..m).step_by(CHUNK) {
-                let mut acc = [_mm512_setzero_si512(); CHUNK];
-                let mut offset = _mm512_setzero_si512();
-                let chunk = ((1u64 << CHUNK) - 1) << c0;
-                for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
-                    // SAFETY: `(tap_row + 1)·K·CO·4 ≤ q.w.len()` and
-                    // `(tap_row + 1)·CO ≤ q.offset.len()` (one (kd, kh)), and
-                    // `x0 + c0 + CHUNK + K − 1 ≤ rows.bytes.len()` (`c0 < m`,
-                    // rows of `len` cubes).
-                    unsafe {
-                        let w = q.w.as_ptr().add(tap_row * K * CO * 4);
-                        let wr: [__m512i; K] =
-                            std::array::from_fn(|kw| _mm512_loadu_si512(w.add(kw * CO * 4).cast()));
-                        offset = _mm512_add_epi32(
-                            offset,
-                            _mm512_loadu_si512(q.offset.as_ptr().add(tap_row * CO).cast()),
-                        );
-                        let x = rows.bytes.as_ptr().add(x0 + c0);
-                        macro_rules! input {
-                            ($($j:literal)*) => {$(
-                                let v = _mm512_set1_epi32(*x.add($j) as i32);
-                                for (kw, wk) in wr.iter().enumerate() {
-                                    if $j >= kw && $j - kw < CHUNK {
-                                        acc[$j - kw] = _mm512_dpbusd_epi32(acc[$j - kw], v, *wk);
-                                    }
-                                }
-                            )*};
+    let (floor, background) = floor_and_background(bias, relu);
+    let block = |c0: usize, chunk: u64, reach: &[(usize, usize, u64)], dst: &mut [f32]| {
+        let mut acc = [_mm512_setzero_si512(); CHUNK];
+        let mut offset = _mm512_setzero_si512();
+        for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
+            // SAFETY: `(tap_row + 1)·K·CO·4 ≤ q.w.len()` and
+            // `(tap_row + 1)·CO ≤ q.offset.len()` (one (kd, kh)), and
+            // `x0 + c0 + CHUNK + K − 1 ≤ rows.bytes.len()` (`c0 < m`, rows of
+            // `len` cubes).
+            unsafe {
+                let w = q.w.as_ptr().add(tap_row * K * CO * 4);
+                let wr: [__m512i; K] =
+                    std::array::from_fn(|kw| _mm512_loadu_si512(w.add(kw * CO * 4).cast()));
+                offset = _mm512_add_epi32(
+                    offset,
+                    _mm512_loadu_si512(q.offset.as_ptr().add(tap_row * CO).cast()),
+                );
+                let x = rows.bytes.as_ptr().add(x0 + c0);
+                macro_rules! input {
+                    ($($j:literal)*) => {$(
+                        let v = _mm512_set1_epi32(*x.add($j) as i32);
+                        for (kw, wk) in wr.iter().enumerate() {
+                            if $j >= kw && $j - kw < CHUNK {
+                                acc[$j - kw] = _mm512_dpbusd_epi32(acc[$j - kw], v, *wk);
+                            }
                         }
-                        const _: () = assert!(CHUNK + K - 1 == 11);
-                        input!(0 1 2 3 4 5 6 7 8 9 10);
-                    }
+                    )*};
                 }
-                for (o, a) in acc.iter().enumerate().take(m - c0) {
-                    let sum = _mm512_cvtepi32_ps(_mm512_sub_epi32(*a, offset));
-                    let v = _mm512_max_ps(_mm512_fmadd_ps(sum, scale, bias), floor);
-                    let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
-                    // SAFETY: `cube` holds 16 floats.
-                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), v) };
-                }
+                const _: () = assert!(CHUNK + K - 1 == 11);
+                input!(0 1 2 3 4 5 6 7 8 9 10);
             }
         }
-    }
+        for (o, a) in acc.iter().enumerate().take(m - c0) {
+            let sum = _mm512_cvtepi32_ps(_mm512_sub_epi32(*a, offset));
+            let v = _mm512_max_ps(_mm512_fmadd_ps(sum, scale, bias), floor);
+            let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
+            // SAFETY: `cube` holds 16 floats.
+            unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), v) };
+        }
+    };
+    for_each_block(rows, [n, p, m], out, background, near, block);
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 
 mod common;
 
-use normalnet_cnn::{Cnn, CnnError, Precision};
+use normalnet_cnn::{Cnn, CnnError, NetWeights, Precision};
 
 fn check(grid: usize, channels: [usize; 3], batch: usize, seed: u64) {
     let w = common::random_net(seed, grid, channels);
@@ -53,14 +53,7 @@ fn int8_blocks_stay_within_quantization_error_of_the_reference() {
     }
     let mut out = vec![0.0f32; batch * 18];
     cnn.forward(&grids, &mut out).unwrap();
-    let mut worst = 0.0f64;
-    for b in 0..batch {
-        let expected =
-            common::reference_forward(&w, &grids[b * cnn.grid_len()..(b + 1) * cnn.grid_len()]);
-        for (&got, &want) in out[b * 18..(b + 1) * 18].iter().zip(&expected) {
-            worst = worst.max((got as f64 - want).abs());
-        }
-    }
+    let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
     // outputs are tanh values in [-1, 1]; 8-bit blocks move them by a few
     // thousandths, far more than f32 rounding (2e-4 above) but small
     assert!(worst < INT8_TOLERANCE, "int8 off by {worst}");
@@ -75,6 +68,19 @@ fn int8_blocks_stay_within_quantization_error_of_the_reference() {
 }
 
 const INT8_TOLERANCE: f64 = 0.03;
+
+/// The largest difference between `out` (18 outputs per grid) and the f64
+/// reference network on `grids`.
+fn largest_difference_to_reference(w: &NetWeights, cnn: &Cnn, grids: &[f32], out: &[f32]) -> f64 {
+    let mut worst = 0.0f64;
+    for (grid, out) in grids.chunks_exact(cnn.grid_len()).zip(out.chunks_exact(18)) {
+        let expected = common::reference_forward(w, grid);
+        for (&got, &want) in out.iter().zip(&expected) {
+            worst = worst.max((got as f64 - want).abs());
+        }
+    }
+    worst
+}
 
 #[test]
 fn empty_grid_is_finite() {
@@ -206,14 +212,7 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
     assert!(cnn.set_int8_stem(true));
     cnn.forward(&grids, &mut out).unwrap();
     assert_ne!(out, blocks, "the int8 stem did not run");
-    let mut worst = 0.0f64;
-    for b in 0..batch {
-        let expected =
-            common::reference_forward(&w, &grids[b * cnn.grid_len()..(b + 1) * cnn.grid_len()]);
-        for (&got, &want) in out[b * 18..(b + 1) * 18].iter().zip(&expected) {
-            worst = worst.max((got as f64 - want).abs());
-        }
-    }
+    let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
     println!("int8 with the int8 stem vs f64: largest output difference {worst:e}");
     assert!(worst < INT8_TOLERANCE, "int8 stem off by {worst}");
     // the row stem off: the scatter stem in f32
