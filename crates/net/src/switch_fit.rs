@@ -377,6 +377,54 @@ mod tests {
     }
 
     #[test]
+    fn the_fit_sees_the_iteration_clamped() {
+        // iterations 1..=25; the network is right in the first 15, the
+        // guided pass after
+        let mut data = rows(2500);
+        let ten = 10f32.to_radians();
+        for (i, r) in data.chunks_exact_mut(ROW_LEN).enumerate() {
+            let k = (i % 25 + 1) as f32;
+            r[ITERATION_FEATURE] = k;
+            let (e0, e1) = if k <= 15.0 { (0.0, ten) } else { (ten, 0.0) };
+            r[NUM_FEATURES..NUM_FEATURES + 2].copy_from_slice(&[e0, e1]);
+        }
+        let params = FitParams {
+            epochs: 30,
+            batch: 256,
+            learning_rate: 1e-2,
+            ..FitParams::default()
+        };
+        let at = |w: &SwitchWeights, k: f64| {
+            let mut x = [0.1; NUM_FEATURES];
+            x[ITERATION_FEATURE] = k;
+            w.probabilities(&x)
+        };
+        // clamped at 10, iterations 16-25 look like 10-15: no way to tell
+        let (w, _) = fit(&data, &[0, 1], &params).unwrap();
+        assert_eq!(w.max_iteration, 10);
+        assert!(w.mean[ITERATION_FEATURE] <= 10.0);
+        assert_eq!(at(&w, 12.0), at(&w, 20.0));
+        // clamped at 25 it learns the switch-over
+        let params = FitParams {
+            max_iteration: 25,
+            ..params
+        };
+        let (w, _) = fit(&data, &[0, 1], &params).unwrap();
+        assert_eq!(w.max_iteration, 25);
+        assert!(
+            at(&w, 8.0)[0] > 0.9 && at(&w, 22.0)[1] > 0.9,
+            "{:?} {:?}",
+            at(&w, 8.0),
+            at(&w, 22.0)
+        );
+        let params = FitParams {
+            max_iteration: 0,
+            ..params
+        };
+        assert!(fit(&data, &[0, 1], &params).is_err());
+    }
+
+    #[test]
     fn disallowed_candidates_are_never_chosen_and_bad_rows_are_refused() {
         let data = rows(500);
         let params = FitParams {
