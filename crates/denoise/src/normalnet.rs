@@ -91,6 +91,9 @@ pub struct NormalnetParams {
     /// has AVX-512 VNNI (`normalnet_cnn::Precision::Int8`); false, or a CPU
     /// without it: f32
     pub int8: bool,
+    /// with `int8`, the first 5³ convolution (the row stem) in 8-bit
+    /// integers too (off: opt-in until measured on E_a; `Cnn::set_int8_stem`)
+    pub int8_stem: bool,
 }
 
 impl Default for NormalnetParams {
@@ -112,6 +115,7 @@ impl Default for NormalnetParams {
             auto_stop_deg: d.auto_stop_deg,
             switch: d.switch,
             int8: INT8_DEFAULT,
+            int8_stem: false,
         }
     }
 }
@@ -183,6 +187,8 @@ struct NormalNet {
     bundle: Bundle,
     /// what `int8` gave on this CPU
     precision: Precision,
+    /// whether the stem runs in int8 (`int8_stem` where the CPU and network allow)
+    int8_stem: bool,
 }
 
 fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseError> {
@@ -194,10 +200,15 @@ fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseE
     } else {
         Precision::F32
     });
+    let mut int8_stem = false;
+    for engine in &mut bundle.engines {
+        int8_stem = engine.set_int8_stem(params.int8_stem);
+    }
     Ok(Box::new(NormalNet {
         params,
         bundle,
         precision,
+        int8_stem,
     }))
 }
 
@@ -208,6 +219,7 @@ impl Method for NormalNet {
         v["model"] = Value::String(self.bundle.path.display().to_string());
         // and the arithmetic that ran (int8 falls back to f32 without VNNI)
         v["int8"] = Value::Bool(self.precision == Precision::Int8);
+        v["int8_stem"] = Value::Bool(self.int8_stem);
         v
     }
 
