@@ -38,14 +38,7 @@ impl Int8Conv {
         }
         let (cin, cout) = (c.cin, c.cout);
         let k3 = c.k.pow(3);
-        let scale: Vec<f32> = (0..cout)
-            .map(|co| {
-                let max = (0..k3 * cin)
-                    .map(|r| c.w[r * cout + co].abs())
-                    .fold(0.0f32, f32::max);
-                if max > 0.0 { max / 127.0 } else { 1.0 }
-            })
-            .collect();
+        let scale = weight_scales(c);
         let groups = cin / 4;
         let mut w = vec![0i8; k3 * cin * cout];
         for tap in 0..k3 {
@@ -117,6 +110,21 @@ impl Int8Conv {
             }
         }
     }
+}
+
+/// Per output channel of `c`, the scale of its signed-byte weights: its
+/// largest |w| / 127 (1 for an all-zero channel).
+pub(crate) fn weight_scales(c: &FoldedConv) -> Vec<f32> {
+    (0..c.cout)
+        .map(|co| {
+            let max =
+                c.w.iter()
+                    .skip(co)
+                    .step_by(c.cout)
+                    .fold(0.0f32, |m, w| m.max(w.abs()));
+            if max > 0.0 { max / 127.0 } else { 1.0 }
+        })
+        .collect()
 }
 
 /// Whether this CPU runs [`Int8Conv`].

@@ -117,14 +117,7 @@ impl Int8Stem {
             return None;
         }
         let taps = K * K * K;
-        let scale: Vec<f32> = (0..CO)
-            .map(|co| {
-                let max = (0..taps * CIN)
-                    .map(|r| c.w[r * CO + co].abs())
-                    .fold(0.0f32, f32::max);
-                if max > 0.0 { max / 127.0 } else { 1.0 }
-            })
-            .collect();
+        let scale = crate::conv_int8::weight_scales(c);
         let mut w = vec![0i8; taps * CO * 4];
         let mut offset = vec![0i32; K * K * CO];
         for tap in 0..taps {
@@ -409,8 +402,9 @@ mod tests {
     use crate::weights::{BatchNormWeights, ConvWeights};
 
     /// A random stem and a grid of side `n` with a sheet, scattered cubes
-    /// and cubes at the borders, as occupied cubes.
-    fn stem_and_grid(n: usize) -> (FoldedConv, Occupied) {
+    /// and cubes at the borders, as occupied cubes and as rows (with the
+    /// stem's output side).
+    fn stem_and_grid(n: usize) -> (FoldedConv, Occupied, Rows, usize) {
         let mut state = 5u32 + n as u32;
         let mut next = || {
             state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
@@ -438,7 +432,10 @@ mod tests {
         }
         let mut occ = Occupied::default();
         occ.gather(&grid, 3);
-        (c, occ)
+        let m = c.output_side(n);
+        let mut rows = Rows::default();
+        rows.build(&occ, n, c.pad, m);
+        (c, occ, rows, m)
     }
 
     /// Sides around multiples of CHUNK.
@@ -452,10 +449,7 @@ mod tests {
             return;
         }
         for n in SIDES {
-            let (c, occ) = stem_and_grid(n);
-            let m = c.output_side(n);
-            let mut rows = Rows::default();
-            rows.build(&occ, n, c.pad, m);
+            let (c, occ, rows, m) = stem_and_grid(n);
             let mut want_near = Vec::new();
             c.reach_mask(&occ, n, &mut want_near);
             for relu in [false, true] {
@@ -485,10 +479,7 @@ mod tests {
             return;
         }
         for n in SIDES {
-            let (c, occ) = stem_and_grid(n);
-            let m = c.output_side(n);
-            let mut rows = Rows::default();
-            rows.build(&occ, n, c.pad, m);
+            let (c, occ, mut rows, m) = stem_and_grid(n);
             let s = rows.quantize();
             let q = Int8Stem::new(&c).expect("a 3 → 16 stem");
             // the values the bytes stand for
