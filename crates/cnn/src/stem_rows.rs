@@ -76,9 +76,7 @@ impl Rows {
                 .copy_from_slice(&occupied.values[cube * CIN..cube * CIN + CIN]);
         }
     }
-}
 
-impl Rows {
     /// The rows in bytes for [`run_int8`]; returns the scale s (value ≈
     /// (byte − 128) · s, s = largest |value| / 127, 1 for an all-zero grid).
     pub(crate) fn quantize(&mut self) -> f32 {

@@ -200,10 +200,7 @@ fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseE
     } else {
         Precision::F32
     });
-    let mut int8_stem = false;
-    for engine in &mut bundle.engines {
-        int8_stem = engine.set_int8_stem(params.int8_stem);
-    }
+    let int8_stem = bundle.set_int8_stem(params.int8_stem);
     Ok(Box::new(NormalNet {
         params,
         bundle,

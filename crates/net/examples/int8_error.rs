@@ -26,9 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("this CPU has no AVX-512 VNNI".into());
     }
     let blocks_only = int8.clone();
-    for e in &mut int8.engines {
-        e.set_int8_stem(true);
-    }
+    int8.set_int8_stem(true);
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
     let slot = exact.output_for_mu_g(0.35);
     for k in networks {

@@ -251,6 +251,16 @@ impl Bundle {
         effective
     }
 
+    /// Whether every network's row stem runs in 8-bit integers with int8
+    /// precision (see [`Cnn::set_int8_stem`]); returns whether it does now.
+    pub fn set_int8_stem(&mut self, on: bool) -> bool {
+        let mut effective = on;
+        for engine in &mut self.engines {
+            effective = engine.set_int8_stem(on);
+        }
+        effective
+    }
+
     /// Loads the bundle in folder `path`.
     ///
     /// # Errors

@@ -19,9 +19,10 @@
 //! ∠(guided, GNF), ∠(net, current); mean and largest ∠ between the face's
 //! network normal and its 1-ring's; mean ∠ between the face's current normal
 //! and its 1-ring's; largest 1-ring ∠ of the GNF normals; the iteration k
-//! (the perceptron clamps it to its `max_iteration`); then three per-mesh values: the median of feature 6
-//! (0-based; a noise level), the median of feature 4, and the fraction of
-//! faces whose feature 5 is below 10° (how much of the mesh is flat).
+//! (the perceptron clamps it to its `max_iteration`); then three per-mesh
+//! values: the median of feature 6 (0-based; a noise level), the median of
+//! feature 4, and the fraction of faces whose feature 5 is below 10° (how
+//! much of the mesh is flat).
 
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_pass};
 use normalnet_filters::{Gnf, GnfParams, NormalFilter};
@@ -39,6 +40,17 @@ pub const DEFAULT_MAX_ITERATION: usize = 10;
 
 fn default_max_iteration() -> usize {
     DEFAULT_MAX_ITERATION
+}
+
+/// Feature `j` of a row as the perceptron reads it: the iteration clamped to
+/// `max_iteration`, every other feature as it is (fitting and inference both
+/// read features through this).
+pub fn feature_as_read(j: usize, x: f64, max_iteration: usize) -> f64 {
+    if j == ITERATION_FEATURE {
+        x.min(max_iteration as f64)
+    } else {
+        x
+    }
 }
 
 /// Features per face.
@@ -119,10 +131,8 @@ impl SwitchWeights {
     pub fn probabilities(&self, x: &[f64; NUM_FEATURES]) -> [f64; NUM_CANDIDATES] {
         let mut z = [0.0; NUM_FEATURES];
         for (j, z) in z.iter_mut().enumerate() {
-            *z = (x[j] - self.mean[j]) / self.std[j];
+            *z = (feature_as_read(j, x[j], self.max_iteration) - self.mean[j]) / self.std[j];
         }
-        let k = x[ITERATION_FEATURE].min(self.max_iteration as f64);
-        z[ITERATION_FEATURE] = (k - self.mean[ITERATION_FEATURE]) / self.std[ITERATION_FEATURE];
         let hidden: Vec<f64> = self
             .w1
             .chunks_exact(NUM_FEATURES)

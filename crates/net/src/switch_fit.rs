@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::switch::{
-    DEFAULT_MAX_ITERATION, ITERATION_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchWeights,
+    DEFAULT_MAX_ITERATION, NUM_CANDIDATES, NUM_FEATURES, SwitchWeights, feature_as_read,
 };
 
 /// One training row: features, then each candidate's angle to the ground
@@ -158,15 +158,7 @@ pub fn fit(
     }
     let n = rows.len() / ROW_LEN;
     // the features as the switch reads them (the iteration clamped)
-    let k_max = params.max_iteration as f64;
-    let feature = |j: usize, x: f32| {
-        let x = f64::from(x);
-        if j == ITERATION_FEATURE {
-            x.min(k_max)
-        } else {
-            x
-        }
-    };
+    let feature = |j: usize, x: f32| feature_as_read(j, f64::from(x), params.max_iteration);
     // feature standardisation
     let mut mean = vec![0.0; NUM_FEATURES];
     let mut var = [0.0; NUM_FEATURES];
@@ -330,6 +322,7 @@ pub fn fit(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::switch::ITERATION_FEATURE;
 
     /// Rows where feature 0 says which candidate is right: below 0.5 the
     /// network (0) is exact and the guided pass (1) is 10° off, above it
