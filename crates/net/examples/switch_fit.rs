@@ -4,9 +4,11 @@
 //!
 //! `cargo run --release -p normalnet-net --example switch_fit -- OUT.toml NOTES DATA.bin...`
 //! (env `HIDDEN`, `EPOCHS`, `SEED`, `MAX_ITERATION`: the iteration
-//! feature's clamp, 10).
+//! feature's clamp, 10; `MIN_ITERATION`: leave out the rows of earlier
+//! iterations, 1 — a late table (`[switch.late]`) is fitted on the rows
+//! after the main table's clamp).
 
-use normalnet_net::switch::{CANDIDATES, SwitchWeights};
+use normalnet_net::switch::{CANDIDATES, ITERATION_FEATURE, SwitchWeights};
 use normalnet_net::switch_fit::{FitParams, fit};
 
 #[derive(serde::Serialize)]
@@ -30,6 +32,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
         );
     }
+    let min_iteration = env("MIN_ITERATION", 1) as f32;
+    let rows: Vec<f32> = rows
+        .chunks_exact(normalnet_net::switch_fit::ROW_LEN)
+        .filter(|r| r[ITERATION_FEATURE] >= min_iteration)
+        .flatten()
+        .copied()
+        .collect();
     let params = FitParams {
         hidden: env("HIDDEN", 32),
         epochs: env("EPOCHS", 40),

@@ -89,6 +89,12 @@ pub struct SwitchWeights {
     /// how it was fitted, in words
     #[serde(default)]
     pub notes: String,
+    /// the switch of the iterations after `max_iteration` (a `[switch.late]`
+    /// table: long runs such as the Table 2 settings' 20–25 iterations);
+    /// without it those iterations use this table with the iteration
+    /// clamped. The default run (10 iterations) never reaches it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub late: Option<Box<SwitchWeights>>,
 }
 
 impl SwitchWeights {
@@ -124,11 +130,23 @@ impl SwitchWeights {
         if self.std.iter().any(|s| *s <= 0.0) {
             return Err("switch: std must be positive".into());
         }
-        Ok(())
+        match &self.late {
+            Some(late) if late.late.is_some() => Err("switch.late: late tables do not nest".into()),
+            Some(late) => late
+                .validate()
+                .map_err(|e| e.replacen("switch", "switch.late", 1)),
+            None => Ok(()),
+        }
     }
 
-    /// The softmax weights of the candidates for one face's features.
+    /// The softmax weights of the candidates for one face's features (the
+    /// late table's after `max_iteration` when there is one).
     pub fn probabilities(&self, x: &[f64; NUM_FEATURES]) -> [f64; NUM_CANDIDATES] {
+        if let Some(late) = &self.late
+            && x[ITERATION_FEATURE] > self.max_iteration as f64
+        {
+            return late.probabilities(x);
+        }
         let mut z = [0.0; NUM_FEATURES];
         for (j, z) in z.iter_mut().enumerate() {
             *z = (feature_as_read(j, x[j], self.max_iteration) - self.mean[j]) / self.std[j];
@@ -321,6 +339,7 @@ pub(crate) mod tests {
             b2,
             max_iteration: DEFAULT_MAX_ITERATION,
             notes: String::new(),
+            late: None,
         }
     }
 
@@ -363,6 +382,39 @@ pub(crate) mod tests {
         assert!(!text.contains("max_iteration"));
         let back: SwitchWeights = toml::from_str(&text).unwrap();
         assert_eq!(back.max_iteration, DEFAULT_MAX_ITERATION);
+    }
+
+    #[test]
+    fn a_late_table_switches_the_iterations_after_the_clamp() {
+        let mut w = constant(1);
+        w.late = Some(Box::new(constant(2)));
+        let at = |w: &SwitchWeights, k: f64| {
+            let mut x = [0.0; NUM_FEATURES];
+            x[ITERATION_FEATURE] = k;
+            let p = w.probabilities(&x);
+            (0..NUM_CANDIDATES)
+                .max_by(|&a, &b| p[a].total_cmp(&p[b]))
+                .unwrap()
+        };
+        assert_eq!((at(&w, 1.0), at(&w, 10.0)), (1, 1));
+        assert_eq!((at(&w, 11.0), at(&w, 25.0)), (2, 2));
+        // written and read back as a [switch.late] table inside [switch]
+        #[derive(Serialize, Deserialize)]
+        struct Manifest {
+            switch: SwitchWeights,
+        }
+        let text = toml::to_string(&Manifest { switch: w.clone() }).unwrap();
+        assert!(text.contains("[switch.late]"), "{text}");
+        let back: Manifest = toml::from_str(&text).unwrap();
+        assert_eq!(back.switch, w);
+        assert!(!toml::to_string(&constant(1)).unwrap().contains("late"));
+        // a bad late table is named; late tables do not nest
+        w.late.as_mut().unwrap().b1.pop();
+        assert!(w.validate().unwrap_err().starts_with("switch.late: b1"));
+        let mut nested = constant(1);
+        nested.late = Some(Box::new(constant(2)));
+        w.late = Some(Box::new(nested));
+        assert!(w.validate().unwrap_err().contains("do not nest"));
     }
 
     #[test]

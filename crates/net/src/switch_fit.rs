@@ -307,6 +307,7 @@ pub fn fit(
         b2: b2.to_vec(),
         max_iteration: params.max_iteration,
         notes: String::new(),
+        late: None,
     };
     weights.validate()?;
     Ok((
