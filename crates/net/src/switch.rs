@@ -23,6 +23,11 @@
 //! values: the median of feature 6 (0-based; a noise level), the median of
 //! feature 4, and the fraction of faces whose feature 5 is below 10° (how
 //! much of the mesh is flat).
+//!
+//! A bundle's switch may carry a second, late table (`[switch.late]`,
+//! [`SwitchWeights::late`]) for the iterations after the main table's
+//! `max_iteration`: long runs (the Table 2 settings run 20–25 iterations)
+//! without changing the default 10-iteration run.
 
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_pass};
 use normalnet_filters::{Gnf, GnfParams, NormalFilter};

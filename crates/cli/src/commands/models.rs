@@ -98,16 +98,24 @@ pub fn describe(bundle: &Bundle) -> String {
         ));
     }
     match &m.switch {
-        Some(w) => line(format!(
-            "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){}",
-            w.hidden,
-            normalnet_net::switch::CANDIDATES.join(", "),
-            if w.notes.is_empty() {
-                String::new()
-            } else {
-                format!("\n            {}", w.notes)
-            }
-        )),
+        Some(w) => line(
+            format!(
+                "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){}",
+                w.hidden,
+                normalnet_net::switch::CANDIDATES.join(", "),
+                if w.notes.is_empty() {
+                    String::new()
+                } else {
+                    format!("\n            {}", w.notes)
+                }
+            ) + &match &w.late {
+                Some(late) => format!(
+                    "\n            after iteration {}: a late table, {} hidden units; {}",
+                    w.max_iteration, late.hidden, late.notes
+                ),
+                None => String::new(),
+            },
+        ),
         None => line("switch      none (the paper's form)".into()),
     }
     s
