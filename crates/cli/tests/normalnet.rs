@@ -100,6 +100,11 @@ fn the_default_model_is_built_into_the_binary() {
         text.contains("<built-in models/lite>") && text.contains("preset      lite"),
         "{text}"
     );
+    // the shipped switch and its late table for runs past 10 iterations
+    assert!(
+        text.contains("switch      learned") && text.contains("after iteration 10: a late table"),
+        "{text}"
+    );
     assert_eq!(
         text.lines().filter(|l| l.contains("°")).count(),
         6,

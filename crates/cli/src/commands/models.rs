@@ -98,24 +98,25 @@ pub fn describe(bundle: &Bundle) -> String {
         ));
     }
     match &m.switch {
-        Some(w) => line(
-            format!(
-                "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){}",
-                w.hidden,
-                normalnet_net::switch::CANDIDATES.join(", "),
-                if w.notes.is_empty() {
-                    String::new()
-                } else {
-                    format!("\n            {}", w.notes)
-                }
-            ) + &match &w.late {
+        Some(w) => {
+            let notes = if w.notes.is_empty() {
+                String::new()
+            } else {
+                format!("\n            {}", w.notes)
+            };
+            let late = match &w.late {
                 Some(late) => format!(
                     "\n            after iteration {}: a late table, {} hidden units; {}",
                     w.max_iteration, late.hidden, late.notes
                 ),
                 None => String::new(),
-            },
-        ),
+            };
+            line(format!(
+                "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){notes}{late}",
+                w.hidden,
+                normalnet_net::switch::CANDIDATES.join(", "),
+            ))
+        }
         None => line("switch      none (the paper's form)".into()),
     }
     s
