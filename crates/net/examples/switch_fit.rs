@@ -1,6 +1,7 @@
 //! Fits the learned switch (`normalnet_net::switch_fit`) to rows dumped by
 //! `switch_trace` and writes a `[switch]` table to append to a bundle's
-//! `manifest.toml`.
+//! `manifest.toml` (with `MIN_ITERATION` > 1 a `[switch.late]` table, to
+//! append after the bundle's `[switch]` table).
 //!
 //! `cargo run --release -p normalnet-net --example switch_fit -- OUT.toml NOTES DATA.bin...`
 //! (env `HIDDEN`, `EPOCHS`, `SEED`, `MAX_ITERATION`: the iteration
@@ -14,6 +15,17 @@ use normalnet_net::switch_fit::{FitParams, fit};
 #[derive(serde::Serialize)]
 struct Table {
     switch: SwitchWeights,
+}
+
+/// Written as `[switch.late]`.
+#[derive(serde::Serialize)]
+struct LateTable {
+    switch: Late,
+}
+
+#[derive(serde::Serialize)]
+struct Late {
+    late: SwitchWeights,
 }
 
 fn env(name: &str, default: usize) -> usize {
@@ -32,10 +44,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
         );
     }
-    let min_iteration = env("MIN_ITERATION", 1) as f32;
+    let min_iteration = env("MIN_ITERATION", 1);
     let rows: Vec<f32> = rows
         .chunks_exact(normalnet_net::switch_fit::ROW_LEN)
-        .filter(|r| r[ITERATION_FEATURE] >= min_iteration)
+        .filter(|r| r[ITERATION_FEATURE] >= min_iteration as f32)
         .flatten()
         .copied()
         .collect();
@@ -58,9 +70,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("expected angle per epoch: {:.3?}", report.epoch_loss);
     weights.notes = notes.clone();
-    std::fs::write(
-        out,
-        format!("\n{}", toml::to_string(&Table { switch: weights })?),
-    )?;
+    let table = if min_iteration > 1 {
+        toml::to_string(&LateTable {
+            switch: Late { late: weights },
+        })?
+    } else {
+        toml::to_string(&Table { switch: weights })?
+    };
+    std::fs::write(out, format!("\n{table}"))?;
     Ok(())
 }
