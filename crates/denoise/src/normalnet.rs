@@ -78,6 +78,11 @@ pub struct NormalnetParams {
     /// turned less than this many degrees between two iterations keeps it
     /// (0 = off: every face every iteration)
     pub freeze_deg: f64,
+    /// flat patches skip the network: from iteration 2 on, a face whose
+    /// 2-ring normals all lie within this many degrees of their mean takes
+    /// that mean as its network output (0 = off; see
+    /// `DenoiseParams::flat_skip_deg`)
+    pub flat_skip_deg: f64,
     /// stop after an iteration whose outputs turned less than this many
     /// degrees on average (`iterations` is then the most; 0 = off: the
     /// paper's pipeline; default 1.0, see `DenoiseParams::auto_stop_deg`)
@@ -112,6 +117,7 @@ impl Default for NormalnetParams {
             fold_guard: d.fold_guard.is_some(),
             fold_guard_cos: d.fold_guard.unwrap_or(FOLD_GUARD_COS),
             freeze_deg: d.freeze_deg,
+            flat_skip_deg: d.flat_skip_deg,
             auto_stop_deg: d.auto_stop_deg,
             switch: d.switch,
             int8: INT8_DEFAULT,
@@ -133,6 +139,7 @@ impl NormalnetParams {
             guided_flat_frac: self.guided_flat_frac,
             fold_guard: self.fold_guard.then_some(self.fold_guard_cos),
             freeze_deg: self.freeze_deg,
+            flat_skip_deg: self.flat_skip_deg,
             auto_stop_deg: self.auto_stop_deg,
             switch: self.switch,
             ..DenoiseParams::default()

@@ -17,8 +17,9 @@ use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_normals};
 use normalnet_filters::{FOLD_GUARD_COS, VertexUpdate, VertexUpdateBuffers, vertex_update_with};
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
-use normalnet_mesh::{Mesh, Progress, Topology};
+use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
 use normalnet_voxel::{Frame, VoxelParams, Voxelizer};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::NetError;
@@ -68,6 +69,13 @@ pub struct DenoiseParams {
     /// longer voxelized (0 = off, every face every iteration: the exact
     /// pipeline; default [`FREEZE_DEG`]).
     pub freeze_deg: f64,
+    /// Flat patches skip the network: from the second iteration on, a face
+    /// whose 2-ring (vertex-adjacent faces, twice) has every face normal
+    /// within this many degrees of the ring's area-weighted mean normal takes
+    /// that mean normal as its network output and is not voxelized (its grid
+    /// would be a nearly constant sheet). 0 = off (default
+    /// [`FLAT_SKIP_DEG`]).
+    pub flat_skip_deg: f64,
     /// The run stops by itself after an iteration whose outputs turned, on
     /// average over all faces, less than this many degrees from the
     /// previous iteration's (`iterations` is then the most it runs;
@@ -99,6 +107,7 @@ impl Default for DenoiseParams {
             guided_flat_frac: 0.5,
             fold_guard: Some(FOLD_GUARD_COS),
             freeze_deg: FREEZE_DEG,
+            flat_skip_deg: FLAT_SKIP_DEG,
             auto_stop_deg: 1.0,
             switch: true,
         }
@@ -140,6 +149,7 @@ impl DenoiseParams {
         }
         for (name, v) in [
             ("freeze_deg", self.freeze_deg),
+            ("flat_skip_deg", self.flat_skip_deg),
             ("auto_stop_deg", self.auto_stop_deg),
         ] {
             if !(v.is_finite() && (0.0..=180.0).contains(&v)) {
@@ -184,6 +194,39 @@ pub struct StageTimes {
 /// (2026-12-01); in the paper's form (no switch) +0.19° on validation, so
 /// the paper's exact pipeline sets it to 0.
 pub const FREEZE_DEG: f64 = 0.5;
+
+/// Default of [`DenoiseParams::flat_skip_deg`]: off until measured.
+pub const FLAT_SKIP_DEG: f64 = 0.0;
+
+/// The faces of `mesh` whose 2-ring is flat within `limit_deg` (see
+/// [`DenoiseParams::flat_skip_deg`]), with the 2-ring's area-weighted mean
+/// normal; `None` for the others.
+pub fn flat_patches(mesh: &Mesh, topology: &Topology, limit_deg: f64) -> Vec<Option<Vec3>> {
+    let geometry = FaceGeometry::new(mesh);
+    let n = mesh.num_faces();
+    let cos_limit = limit_deg.to_radians().cos();
+    (0..n)
+        .into_par_iter()
+        .with_min_len(256)
+        .map_init(
+            || (vec![false; n], Vec::new()),
+            |(mark, ring), f| {
+                topology.face_ring_into(f, 2, mark, ring);
+                let mut sum = [0.0; 3];
+                for &g in ring.iter() {
+                    let g = g as usize;
+                    sum = vec3::add(sum, vec3::scale(geometry.normals[g], geometry.areas[g]));
+                }
+                let mean = vec3::normalize_or_zero(sum);
+                let flat = mean != [0.0; 3]
+                    && ring
+                        .iter()
+                        .all(|&g| vec3::dot(geometry.normals[g as usize], mean) >= cos_limit);
+                flat.then_some(mean)
+            },
+        )
+        .collect()
+}
 
 /// What one filtering iteration did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -246,8 +289,19 @@ pub fn denoise(
         progress.message(&format!("iteration {k}/{}", params.iterations));
         let current = mesh.with_positions(positions.clone());
         let i = network_for_iteration(k);
-        let active: Vec<u32> = (0..n as u32).filter(|&f| !frozen[f as usize]).collect();
         let mut normals = previous.clone().unwrap_or_else(|| vec![[0.0; 3]; n]);
+        let flat = if params.flat_skip_deg > 0.0 && k > 1 {
+            flat_patches(&current, &topology, params.flat_skip_deg)
+        } else {
+            Vec::new()
+        };
+        for (f, mean) in flat.iter().enumerate() {
+            if let Some(mean) = mean {
+                normals[f] = *mean;
+            }
+        }
+        let skipped = |f: usize| frozen[f] || flat.get(f).is_some_and(|m| m.is_some());
+        let active: Vec<u32> = (0..n as u32).filter(|&f| !skipped(f as usize)).collect();
         let t = filtered_normals_of(
             &current,
             &topology,
@@ -806,6 +860,89 @@ mod tests {
         assert_eq!(run(1, 180.0), guided);
         // within 1e-9°: no face flat (random networks), the paper's form
         assert_eq!(run(1, 1e-9), paper);
+    }
+
+    /// A strip of 8 × 4 squares (two triangles each) folded by 90° along
+    /// x = 0: the half x ≤ 0 lies in the plane y = 0, the half x ≥ 0 in
+    /// the plane x = 0.
+    fn folded_strip() -> Mesh {
+        let mut positions = Vec::new();
+        for i in 0..=8 {
+            for j in 0..=4 {
+                let x = i as f64 - 4.0;
+                let z = j as f64;
+                positions.push(if x <= 0.0 { [x, 0.0, z] } else { [0.0, x, z] });
+            }
+        }
+        let v = |i: u32, j: u32| i * 5 + j;
+        let mut faces = Vec::new();
+        for i in 0..8 {
+            for j in 0..4 {
+                faces.push([v(i, j), v(i, j + 1), v(i + 1, j + 1)]);
+                faces.push([v(i, j), v(i + 1, j + 1), v(i + 1, j)]);
+            }
+        }
+        Mesh::new(positions, faces).unwrap()
+    }
+
+    #[test]
+    fn flat_patches_are_the_faces_away_from_the_fold_and_skip_the_network() {
+        let mesh = folded_strip();
+        let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+        let normals = face_normals(&mesh);
+        let flat = flat_patches(&mesh, &topology, 10.0);
+        // columns 0–1 and 6–7 lie two rings or more from the fold
+        for (f, got) in flat.iter().enumerate() {
+            let column = f / 8;
+            let far = !(2..6).contains(&column);
+            assert_eq!(got.is_some(), far, "face {f} (column {column})");
+            if let Some(mean) = got {
+                assert!(vec3::angle(*mean, normals[f]) < 1e-9, "face {f}");
+            }
+        }
+        // the fold's two normals are 90° apart: the 2-ring mean lies less
+        // than 90° from each (at least 1 of 40 faces on the other side: 88.6°
+        // at most), so a limit of 89.5° takes in every face
+        assert!(
+            flat_patches(&mesh, &topology, 89.5)
+                .iter()
+                .all(|m| m.is_some())
+        );
+
+        // with a switch that keeps every face where it is, the mesh does not
+        // move, and from the second iteration on the flat faces skip the network
+        let mut bundle = tiny_bundle();
+        bundle.manifest.switch = Some(crate::switch::tests::constant(3));
+        let run = |flat_skip_deg: f64| {
+            let params = DenoiseParams {
+                iterations: 3,
+                vertex_iterations: 2,
+                freeze_deg: 0.0,
+                auto_stop_deg: 0.0,
+                flat_skip_deg,
+                ..DenoiseParams::default()
+            };
+            denoise(&mesh, &bundle, &params, &NoProgress).unwrap().1
+        };
+        let evaluated = |t: StageTimes| -> Vec<usize> {
+            t.iterations.iter().map(|s| s.faces_evaluated).collect()
+        };
+        let n = mesh.num_faces();
+        let skipped = flat.iter().filter(|m| m.is_some()).count();
+        assert_eq!(skipped, 32);
+        assert_eq!(evaluated(run(0.0)), [n, n, n]);
+        assert_eq!(evaluated(run(10.0)), [n, n - skipped, n - skipped]);
+        let bad = DenoiseParams {
+            flat_skip_deg: f64::NAN,
+            ..DenoiseParams::default()
+        };
+        assert!(matches!(
+            bad.validate(),
+            Err(NetError::InvalidParameter {
+                name: "flat_skip_deg",
+                ..
+            })
+        ));
     }
 
     #[test]
