@@ -3,7 +3,7 @@
 //! on Fandisk0.3 (when ../shared/data is present) and on a generated noisy
 //! 100k-face shape, with the f32 and (where the CPU has VNNI) int8 engines;
 //! then the denoising of Fandisk0.3 end to end: the defaults (int8, freeze
-//! 0.5) and each shortcut off. With `NORMALNET_TORCH_PYTHON` set
+//! 0.5, flat skip 15°) and the shortcuts off. With `NORMALNET_TORCH_PYTHON` set
 //! to a Python that has torch, the same lite network in PyTorch CPU f32
 //! (`../shared/tools/torch_bench/bench.py`, forward, 2 threads) runs in the
 //! same process run as the ratio anchor.
@@ -116,13 +116,26 @@ fn one_pass(name: &str, mesh: &Mesh, bundle: &Bundle, precision: &str) {
 
 /// The default denoising, exact and with the shortcuts, end to end.
 fn end_to_end(name: &str, mesh: &Mesh, gt: &Mesh) {
-    let variants: [(&str, Value); 4] = [
-        ("defaults (int8, freeze_deg=0.5)", json!({})),
-        ("int8, freeze_deg=0", json!({"freeze_deg": 0.0})),
-        ("f32, freeze_deg=0.5", json!({"int8": false})),
+    let variants: [(&str, Value); 5] = [
         (
-            "f32, freeze_deg=0 (the exact pipeline)",
-            json!({"int8": false, "freeze_deg": 0.0}),
+            "defaults (int8, freeze_deg=0.5, flat_skip_deg=15)",
+            json!({}),
+        ),
+        (
+            "int8, freeze_deg=0.5, flat_skip_deg=0",
+            json!({"flat_skip_deg": 0.0}),
+        ),
+        (
+            "int8, freeze_deg=0, flat_skip_deg=0",
+            json!({"freeze_deg": 0.0, "flat_skip_deg": 0.0}),
+        ),
+        (
+            "f32, freeze_deg=0.5, flat_skip_deg=15",
+            json!({"int8": false}),
+        ),
+        (
+            "f32, freeze_deg=0, flat_skip_deg=0 (the exact pipeline)",
+            json!({"int8": false, "freeze_deg": 0.0, "flat_skip_deg": 0.0}),
         ),
     ];
     for (label, params) in variants {

@@ -109,11 +109,12 @@ fn outputs_are_those_of_the_program_before_the_move() {
         assert_eq!(fnv(&out), *expected, "{name}: {:#018x}", fnv(&out));
     }
     // the exact pipeline of that commit: the paper's form, 10 iterations,
-    // no auto stop, every face every iteration, f32
+    // no auto stop, every face every iteration (no freezing, no flat skip), f32
     let mut exact = Params::new();
     exact.insert("auto_stop_deg".into(), 0.0.into());
     exact.insert("switch".into(), false.into());
     exact.insert("freeze_deg".into(), 0.0.into());
+    exact.insert("flat_skip_deg".into(), 0.0.into());
     exact.insert("int8".into(), false.into());
     let out = Denoiser::new("normalnet", &exact)
         .unwrap()
