@@ -198,10 +198,13 @@ pub const FREEZE_DEG: f64 = 0.5;
 /// Default of [`DenoiseParams::flat_skip_deg`]: 15°. With the learned switch
 /// it lowered the mean E_a on the validation set (8 held-out meshes) from
 /// 6.759° to 6.583° (better on 6 of 8; homer +0.035°) in 21 % less time,
-/// and on the 6 mild validation pairs from 2.834° to 2.82° (2026-12-01):
+/// and on the 6 mild validation pairs from 2.834° to 2.794° (2026-12-01):
 /// on CAD-like parts the 2-ring mean is a better filtered normal than the
 /// lite network's where the patch is that flat. 8° gave 6.705°, 25° 6.593°,
-/// 35° 6.705° (organic meshes over-smoothed: homer 9.0°).
+/// 35° 6.705° (organic meshes over-smoothed: homer 9.0°). At 25 iterations
+/// (N_v 10, μ_g 0.3) the 8 meshes went from 6.101° to 5.955° and the
+/// Twelve-like validation polyhedra from 4.835° to 4.862° (the one loser;
+/// see docs/benchmarks.md).
 pub const FLAT_SKIP_DEG: f64 = 15.0;
 
 /// The faces of `mesh` whose 2-ring is flat within `limit_deg` (see
