@@ -26,6 +26,11 @@
 //!
 //! Env `AUTO_STOP=DEG` (default 0: all ITERATIONS): stop after an
 //! iteration whose network outputs turned less than DEG on average.
+//!
+//! Env `FLAT=DEG` (default 0: off): from iteration 2 on, faces whose 2-ring
+//! is flat within DEG take the 2-ring mean as their network output, as the
+//! denoiser's `flat_skip_deg` does (the network still runs on every face
+//! here, so the rows match the denoiser's, not its speed).
 
 use std::io::Write;
 
@@ -34,7 +39,7 @@ use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{NoProgress, Topology, compare, read_mesh};
 use normalnet_net::bundle::network_for_iteration;
-use normalnet_net::inference::filtered_normals;
+use normalnet_net::inference::{filtered_normals, flat_patches};
 use normalnet_net::switch::{self, NUM_CANDIDATES, SwitchState, SwitchWeights};
 
 #[derive(serde::Deserialize)]
@@ -81,6 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let mu_g: f64 = std::env::var("MU_G").map_or(0.35, |s| s.parse().expect("MU_G"));
     let vertex_iterations: usize = std::env::var("NV").map_or(20, |s| s.parse().expect("NV"));
+    let flat_skip: f64 = std::env::var("FLAT").map_or(0.0, |s| s.parse().expect("FLAT"));
     let topology = Topology::new(noisy.num_vertices(), &noisy.faces);
     let gt_normals = face_normals(&gt);
     let n = noisy.num_faces();
@@ -94,7 +100,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let stay_before = chosen[NUM_CANDIDATES - 1];
         let current = noisy.with_positions(positions.clone());
         let i = network_for_iteration(k);
-        let (net, _) = filtered_normals(
+        let (mut net, _) = filtered_normals(
             &current,
             &topology,
             &bundle.engines[i],
@@ -105,6 +111,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             None,
             &NoProgress,
         )?;
+        if flat_skip > 0.0 && k > 1 {
+            let flat = flat_patches(&current, &topology, flat_skip);
+            for (f, mean) in flat.iter().enumerate() {
+                if let Some(mean) = mean {
+                    net[f] = *mean;
+                }
+            }
+        }
         let change = previous.as_ref().map_or(f64::INFINITY, |p| {
             p.iter()
                 .zip(&net)
