@@ -39,7 +39,7 @@ use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{NoProgress, Topology, compare, read_mesh};
 use normalnet_net::bundle::network_for_iteration;
-use normalnet_net::inference::{filtered_normals, flat_patches};
+use normalnet_net::inference::{filtered_normals, take_flat_means};
 use normalnet_net::switch::{self, NUM_CANDIDATES, SwitchState, SwitchWeights};
 
 #[derive(serde::Deserialize)]
@@ -112,12 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &NoProgress,
         )?;
         if flat_skip > 0.0 && k > 1 {
-            let flat = flat_patches(&current, &topology, flat_skip);
-            for (f, mean) in flat.iter().enumerate() {
-                if let Some(mean) = mean {
-                    net[f] = *mean;
-                }
-            }
+            take_flat_means(&current, &topology, flat_skip, &mut net);
         }
         let change = previous.as_ref().map_or(f64::INFINITY, |p| {
             p.iter()

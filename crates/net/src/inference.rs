@@ -237,6 +237,26 @@ pub fn flat_patches(mesh: &Mesh, topology: &Topology, limit_deg: f64) -> Vec<Opt
         .collect()
 }
 
+/// [`flat_patches`] applied to `normals` (len #F): the flat faces' entries
+/// become their 2-ring means. Returns which faces were flat.
+pub fn take_flat_means(
+    mesh: &Mesh,
+    topology: &Topology,
+    limit_deg: f64,
+    normals: &mut [Vec3],
+) -> Vec<bool> {
+    flat_patches(mesh, topology, limit_deg)
+        .into_iter()
+        .zip(normals.iter_mut())
+        .map(|(mean, normal)| {
+            if let Some(mean) = mean {
+                *normal = mean;
+            }
+            mean.is_some()
+        })
+        .collect()
+}
+
 /// What one filtering iteration did.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct IterationStats {
@@ -300,17 +320,13 @@ pub fn denoise(
         let i = network_for_iteration(k);
         let mut normals = previous.clone().unwrap_or_else(|| vec![[0.0; 3]; n]);
         let flat = if params.flat_skip_deg > 0.0 && k > 1 {
-            flat_patches(&current, &topology, params.flat_skip_deg)
+            take_flat_means(&current, &topology, params.flat_skip_deg, &mut normals)
         } else {
-            Vec::new()
+            vec![false; n]
         };
-        for (f, mean) in flat.iter().enumerate() {
-            if let Some(mean) = mean {
-                normals[f] = *mean;
-            }
-        }
-        let skipped = |f: usize| frozen[f] || flat.get(f).is_some_and(|m| m.is_some());
-        let active: Vec<u32> = (0..n as u32).filter(|&f| !skipped(f as usize)).collect();
+        let active: Vec<u32> = (0..n as u32)
+            .filter(|&f| !frozen[f as usize] && !flat[f as usize])
+            .collect();
         let t = filtered_normals_of(
             &current,
             &topology,
