@@ -4,7 +4,8 @@
 use normalnet_mesh::Topology;
 use normalnet_mesh::geometry::{FaceGeometry, count_degenerate_faces};
 use normalnet_mesh::vec3;
-use normalnet_voxel::shapes::{ALL_KINDS, ShapeKind, generate, generate_seeded};
+use normalnet_voxel::shapes::build::ConvexPolyhedron;
+use normalnet_voxel::shapes::{ALL_KINDS, NAMED_KINDS, ShapeKind, generate, generate_seeded};
 
 #[test]
 fn shapes_are_closed_manifold_and_non_degenerate() {
@@ -71,4 +72,103 @@ fn generation_is_deterministic() {
         generate_seeded(13, 800).unwrap(),
         generate_seeded(23, 800).unwrap()
     );
+}
+
+#[test]
+fn planes_cut_the_polyhedron_their_duality_predicts() {
+    let axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let mut cube: Vec<([f64; 3], f64)> = axes
+        .iter()
+        .flat_map(|&a| [(a, 0.5), (vec3::scale(a, -1.0), 0.5)])
+        .collect();
+    let p = ConvexPolyhedron::from_planes(&cube).unwrap();
+    assert_eq!(p.vertices.len(), 8);
+    assert_eq!(p.facets.len(), 6);
+    assert!(p.facets.iter().all(|f| f.len() == 4));
+    assert!(
+        p.vertices
+            .iter()
+            .all(|v| v.iter().all(|c| (c.abs() - 0.5).abs() < 1e-12))
+    );
+    assert!((p.shortest_edge() - 1.0).abs() < 1e-12);
+    // a plane outside the cube cuts nothing
+    cube.push((vec3::normalize_or_zero([1.0, 1.0, 1.0]), 5.0));
+    let q = ConvexPolyhedron::from_planes(&cube).unwrap();
+    assert_eq!((q.vertices.len(), q.facets.len()), (8, 6));
+    // one that cuts a corner adds a triangle and two corners
+    cube.push((vec3::normalize_or_zero([1.0, 1.0, 1.0]), 0.8));
+    let q = ConvexPolyhedron::from_planes(&cube).unwrap();
+    assert_eq!((q.vertices.len(), q.facets.len()), (10, 7));
+    // planes that face one half-space only bound nothing
+    let open: Vec<([f64; 3], f64)> = [
+        [0.0, 0.0, 1.0],
+        [0.8, 0.0, 0.6],
+        [-0.8, 0.0, 0.6],
+        [0.0, 0.8, 0.6],
+    ]
+    .map(|n| (n, 1.0))
+    .to_vec();
+    assert!(ConvexPolyhedron::from_planes(&open).is_none());
+    // the regular dodecahedron: planes along the icosahedron's corners
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let dodeca: Vec<([f64; 3], f64)> = [
+        [0.0, 1.0, t],
+        [0.0, -1.0, t],
+        [0.0, 1.0, -t],
+        [0.0, -1.0, -t],
+        [1.0, t, 0.0],
+        [-1.0, t, 0.0],
+        [1.0, -t, 0.0],
+        [-1.0, -t, 0.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, 1.0],
+        [t, 0.0, -1.0],
+        [-t, 0.0, -1.0],
+    ]
+    .map(|n| (vec3::normalize_or_zero(n), 1.0))
+    .to_vec();
+    let d = ConvexPolyhedron::from_planes(&dodeca).unwrap();
+    assert_eq!(d.vertices.len(), 20);
+    assert!(d.facets.len() == 12 && d.facets.iter().all(|f| f.len() == 5));
+}
+
+#[test]
+fn polyhedra_are_named_only_and_have_flat_facets_and_sharp_edges() {
+    assert_eq!(
+        ShapeKind::from_name("polyhedron").unwrap(),
+        ShapeKind::Polyhedron
+    );
+    assert!(NAMED_KINDS.iter().all(|k| !ALL_KINDS.contains(k)));
+    for seed in 0..8 {
+        let mesh = generate(ShapeKind::Polyhedron, seed, 2000).unwrap();
+        let topo = Topology::new(mesh.num_vertices(), &mesh.faces);
+        let n = normalnet_mesh::geometry::face_normals(&mesh);
+        // facets: classes of faces joined across edges that do not bend
+        let mut class: Vec<usize> = (0..n.len()).collect();
+        fn root(c: &mut [usize], mut f: usize) -> usize {
+            while c[f] != f {
+                c[f] = c[c[f]];
+                f = c[f];
+            }
+            f
+        }
+        let mut sharp = 0;
+        for &[a, b] in &topo.edge_faces {
+            let turn = vec3::angle(n[a as usize], n[b as usize]).to_degrees();
+            if turn > 10.0 {
+                sharp += 1;
+            } else {
+                assert!(turn < 1e-3, "seed {seed}: a facet bends by {turn}°");
+                let (ra, rb) = (root(&mut class, a as usize), root(&mut class, b as usize));
+                class[ra] = rb;
+            }
+        }
+        let facets = (0..n.len()).filter(|&f| root(&mut class, f) == f).count();
+        println!(
+            "seed {seed}: {} faces, {facets} facets, {sharp} sharp edges",
+            mesh.num_faces()
+        );
+        assert!((6..=20).contains(&facets), "seed {seed}: {facets} facets");
+        assert!(sharp > 30);
+    }
 }

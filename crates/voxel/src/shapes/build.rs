@@ -1,9 +1,10 @@
 //! Coarse polyhedral builders: 2D profiles, ear clipping, lofts (rings of a
-//! profile stacked along y, capped), and the icosahedron.
+//! profile stacked along y, capped), the icosahedron and convex polyhedra
+//! cut by planes.
 
 use super::edit::EditMesh;
 use super::surface::Surface;
-use normalnet_mesh::vec3::Vec3;
+use normalnet_mesh::vec3::{self, Vec3};
 use std::f64::consts::TAU;
 
 /// A closed 2D polygon in the (x, z) plane, counter-clockwise (positive
@@ -350,5 +351,152 @@ pub fn cone_surface(centre: [f64; 2], y0: f64, r0: f64, y1: f64, r1: f64) -> Sur
         r0,
         y1,
         r1,
+    }
+}
+
+/// A convex polyhedron: its vertices and its facets (vertex indices,
+/// counter-clockwise seen from outside).
+pub struct ConvexPolyhedron {
+    /// corner points
+    pub vertices: Vec<Vec3>,
+    /// one polygon per facet
+    pub facets: Vec<Vec<usize>>,
+}
+
+impl ConvexPolyhedron {
+    /// The intersection of the half-spaces `n·x ≤ d` of `planes` (unit
+    /// normal `n`, offset `d > 0`: the origin is inside). By polar duality
+    /// its corners are the facets of the convex hull of the points `n / d`
+    /// (a corner `x` solves `n·x = d` for the three planes of a hull
+    /// triangle) and its facets are the hull's vertices (a plane whose point
+    /// is inside the hull is redundant). `None` when the planes do not bound
+    /// a polyhedron (the origin is not strictly inside the hull) or four
+    /// points are nearly coplanar (a corner shared by four planes).
+    pub fn from_planes(planes: &[(Vec3, f64)]) -> Option<ConvexPolyhedron> {
+        if planes.len() < 4 || planes.iter().any(|&(_, d)| !(d > 0.0)) {
+            return None;
+        }
+        let p: Vec<Vec3> = planes
+            .iter()
+            .map(|&(n, d)| vec3::scale(n, 1.0 / d))
+            .collect();
+        let eps = 1e-9 * p.iter().map(|q| vec3::norm(*q)).fold(0.0, f64::max).powi(3);
+        // hull triangles by brute force (a few dozen planes at most)
+        let mut corners: Vec<([usize; 3], Vec3)> = Vec::new();
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                for k in j + 1..p.len() {
+                    let normal = vec3::cross(vec3::sub(p[j], p[i]), vec3::sub(p[k], p[i]));
+                    let (mut above, mut below, mut on) = (false, false, false);
+                    for (l, q) in p.iter().enumerate() {
+                        if l == i || l == j || l == k {
+                            continue;
+                        }
+                        let s = vec3::dot(normal, vec3::sub(*q, p[i]));
+                        above |= s > eps;
+                        below |= s < -eps;
+                        on |= s.abs() <= eps;
+                    }
+                    if above && below {
+                        continue;
+                    }
+                    if on {
+                        // a hull face through four points: four planes
+                        // meet at one corner
+                        return None;
+                    }
+                    let outward = if above {
+                        vec3::scale(normal, -1.0)
+                    } else {
+                        normal
+                    };
+                    let c = vec3::dot(outward, p[i]);
+                    if c <= eps {
+                        return None;
+                    }
+                    corners.push(([i, j, k], vec3::scale(outward, 1.0 / c)));
+                }
+            }
+        }
+        let mut facets = Vec::new();
+        for (i, &(n, _)) in planes.iter().enumerate() {
+            let mut ring: Vec<usize> = (0..corners.len())
+                .filter(|&c| corners[c].0.contains(&i))
+                .collect();
+            if ring.is_empty() {
+                continue;
+            }
+            if ring.len() < 3 {
+                return None;
+            }
+            let centre = vec3::scale(
+                ring.iter()
+                    .fold([0.0; 3], |s, &c| vec3::add(s, corners[c].1)),
+                1.0 / ring.len() as f64,
+            );
+            let u = vec3::normalize_or_zero(vec3::cross(
+                n,
+                if n[0].abs() < 0.9 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0.0, 1.0, 0.0]
+                },
+            ));
+            let v = vec3::cross(n, u);
+            let angle = |c: usize| {
+                let q = vec3::sub(corners[c].1, centre);
+                vec3::dot(q, v).atan2(vec3::dot(q, u))
+            };
+            ring.sort_by(|&a, &b| angle(a).total_cmp(&angle(b)));
+            facets.push(ring);
+        }
+        Some(ConvexPolyhedron {
+            vertices: corners.into_iter().map(|(_, x)| x).collect(),
+            facets,
+        })
+    }
+
+    /// The shortest edge.
+    pub fn shortest_edge(&self) -> f64 {
+        self.facets
+            .iter()
+            .flat_map(|f| (0..f.len()).map(move |a| (f[a], f[(a + 1) % f.len()])))
+            .map(|(a, b)| vec3::dist2(self.vertices[a], self.vertices[b]).sqrt())
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The smallest and the largest interior angle of a facet corner, in
+    /// degrees (near 0°: a needle; near 180°: a corner that barely bends the
+    /// facet's outline).
+    pub fn corner_angles(&self) -> (f64, f64) {
+        let (mut smallest, mut largest) = (180.0f64, 0.0f64);
+        for f in &self.facets {
+            for a in 0..f.len() {
+                let at = self.vertices[f[a]];
+                let prev = vec3::sub(self.vertices[f[(a + f.len() - 1) % f.len()]], at);
+                let next = vec3::sub(self.vertices[f[(a + 1) % f.len()]], at);
+                let angle = vec3::angle(prev, next).to_degrees();
+                smallest = smallest.min(angle);
+                largest = largest.max(angle);
+            }
+        }
+        (smallest, largest)
+    }
+
+    /// Adds the polyhedron to `m`: each facet a fan of triangles about its
+    /// centroid, tag 0 (planar).
+    pub fn add_to(&self, m: &mut EditMesh) {
+        let ids: Vec<u32> = self.vertices.iter().map(|&x| m.add_vertex(x)).collect();
+        for f in &self.facets {
+            let centre = vec3::scale(
+                f.iter()
+                    .fold([0.0; 3], |s, &c| vec3::add(s, self.vertices[c])),
+                1.0 / f.len() as f64,
+            );
+            let c = m.add_vertex(centre);
+            for a in 0..f.len() {
+                m.add_face([c, ids[f[a]], ids[f[(a + 1) % f.len()]]], 0);
+            }
+        }
     }
 }

@@ -24,7 +24,7 @@ pub mod edit;
 pub mod surface;
 
 use crate::error::VoxelError;
-use build::{Ring, cone_surface, loft, ring};
+use build::{ConvexPolyhedron, Ring, cone_surface, loft, ring};
 use edit::EditMesh;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Mesh, Topology};
@@ -57,9 +57,19 @@ pub enum ShapeKind {
     Blob,
     /// Two or three of the other kinds placed side by side.
     Union,
+    /// A convex polyhedron cut by 6–20 random planes: flat facets meeting at
+    /// obtuse edges, like a randomised dodecahedron (named only: not in
+    /// [`ALL_KINDS`]).
+    Polyhedron,
 }
 
-/// All kinds, in the order [`ShapeKind::from_seed`] cycles through them.
+/// Kinds made only when asked for by name (`normalnet shapes --kind`),
+/// outside the seed cycle of [`ALL_KINDS`], so that every `shape:N` training
+/// source keeps its shape.
+pub const NAMED_KINDS: [ShapeKind; 1] = [ShapeKind::Polyhedron];
+
+/// The kinds of the seed cycle, in the order [`ShapeKind::from_seed`] cycles
+/// through them.
 pub const ALL_KINDS: [ShapeKind; 10] = [
     ShapeKind::Box,
     ShapeKind::Cylinder,
@@ -92,6 +102,7 @@ impl ShapeKind {
             ShapeKind::Ruled => "ruled",
             ShapeKind::Blob => "blob",
             ShapeKind::Union => "union",
+            ShapeKind::Polyhedron => "polyhedron",
         }
     }
 
@@ -100,14 +111,20 @@ impl ShapeKind {
     /// # Errors
     /// [`VoxelError::InvalidParameter`] naming `kind`.
     pub fn from_name(name: &str) -> Result<ShapeKind, VoxelError> {
-        ALL_KINDS
-            .into_iter()
+        let mut kinds = ALL_KINDS.iter().chain(&NAMED_KINDS);
+        kinds
             .find(|k| k.name() == name)
+            .copied()
             .ok_or_else(|| VoxelError::InvalidParameter {
                 name: "kind",
                 message: format!(
                     "unknown shape kind {name:?} (expected one of {})",
-                    ALL_KINDS.map(|k| k.name()).join(", ")
+                    ALL_KINDS
+                        .iter()
+                        .chain(&NAMED_KINDS)
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             })
     }
@@ -247,6 +264,43 @@ fn build_coarse(kind: ShapeKind, seed: u64, s: f64) -> EditMesh {
     let mut m = EditMesh::new();
     build_part(&mut m, kind, &mut rng, s);
     m
+}
+
+/// 6–20 planes 0.45–0.55 from the centre with normals at least 25° apart,
+/// drawn again until the polyhedron they cut has no edge shorter than 0.05
+/// and every facet corner within 15–160° (needles and slivers would stay
+/// after refinement);
+/// a cube if a thousand draws fail.
+fn polyhedron(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let min_cos = 25f64.to_radians().cos();
+    for _ in 0..1000 {
+        let count = rng.random_range(6..=20);
+        let mut normals: Vec<Vec3> = Vec::with_capacity(count);
+        for _ in 0..100 * count {
+            let z: f64 = rng.random_range(-1.0..1.0);
+            let phi = rng.random_range(0.0..TAU);
+            let r = (1.0 - z * z).sqrt();
+            let n = [r * phi.cos(), r * phi.sin(), z];
+            if normals.iter().all(|&o| vec3::dot(o, n) < min_cos) {
+                normals.push(n);
+                if normals.len() == count {
+                    break;
+                }
+            }
+        }
+        let planes: Vec<(Vec3, f64)> = normals
+            .iter()
+            .map(|&n| (n, rng.random_range(0.45..0.55)))
+            .collect();
+        if let Some(p) = ConvexPolyhedron::from_planes(&planes) {
+            let (smallest, largest) = p.corner_angles();
+            if p.shortest_edge() >= 0.05 && smallest >= 15.0 && largest <= 160.0 {
+                p.add_to(m);
+                return;
+            }
+        }
+    }
+    build::prism(m, &build::rect(0.8, 0.8), [0.0, 0.0], 0.8);
 }
 
 fn round_sides(r: f64, s: f64) -> usize {
@@ -431,6 +485,7 @@ fn build_part(m: &mut EditMesh, kind: ShapeKind, rng: &mut ChaCha8Rng, s: f64) {
                 m.positions[v] = m.surfaces[tag as usize].project(p);
             }
         }
+        ShapeKind::Polyhedron => polyhedron(m, rng),
         ShapeKind::Union => {
             let parts = rng.random_range(2..=3);
             let kinds = [
