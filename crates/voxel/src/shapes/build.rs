@@ -373,7 +373,7 @@ impl ConvexPolyhedron {
     /// a polyhedron (the origin is not strictly inside the hull) or four
     /// points are nearly coplanar (a corner shared by four planes).
     pub fn from_planes(planes: &[(Vec3, f64)]) -> Option<ConvexPolyhedron> {
-        if planes.len() < 4 || planes.iter().any(|&(_, d)| !(d > 0.0)) {
+        if planes.len() < 4 || planes.iter().any(|&(_, d)| d.is_nan() || d <= 0.0) {
             return None;
         }
         let p: Vec<Vec3> = planes
