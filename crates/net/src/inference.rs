@@ -264,8 +264,9 @@ pub struct IterationStats {
     pub network: usize,
     /// faces voxelized and run through the network (the others were frozen)
     pub faces_evaluated: usize,
-    /// mean angle in degrees between this iteration's filtered normals and
-    /// the previous iteration's, over all faces (0 in the first)
+    /// mean angle in degrees between this iteration's filtered normals
+    /// (network outputs, flat faces' 2-ring means) and the previous
+    /// iteration's, over all faces (0 in the first)
     pub mean_change_deg: f64,
     /// wall-clock seconds of the iteration
     pub seconds: f64,
@@ -344,13 +345,22 @@ pub fn denoise(
         times.add(&t);
         let mean_change_deg = match &previous {
             Some(p) => {
-                let changes: Vec<f64> = active
+                // every face: a frozen one did not change, a flat one
+                // changed as its 2-ring mean did
+                let changes: Vec<f64> = p
                     .iter()
-                    .map(|&f| vec3::angle(p[f as usize], normals[f as usize]).to_degrees())
+                    .zip(&normals)
+                    .map(|(a, b)| {
+                        if a == b {
+                            0.0
+                        } else {
+                            vec3::angle(*a, *b).to_degrees()
+                        }
+                    })
                     .collect();
                 if params.freeze_deg > 0.0 {
-                    for (&f, &c) in active.iter().zip(&changes) {
-                        frozen[f as usize] = c < params.freeze_deg;
+                    for &f in &active {
+                        frozen[f as usize] = changes[f as usize] < params.freeze_deg;
                     }
                 }
                 changes.iter().sum::<f64>() / n as f64
@@ -958,6 +968,14 @@ mod tests {
         assert_eq!(skipped, 32);
         assert_eq!(evaluated(run(0.0)), [n, n, n]);
         assert_eq!(evaluated(run(10.0)), [n, n - skipped, n - skipped]);
+        // every face flat: the network runs once, and the turn from its
+        // outputs to the 2-ring means counts in the mean change (which the
+        // paper form's auto stop reads); then the means stay
+        let t = run(89.5);
+        let changes: Vec<f64> = t.iterations.iter().map(|s| s.mean_change_deg).collect();
+        assert_eq!(evaluated(t), [n, 0, 0]);
+        assert!(changes[1] > 1.0, "{changes:?}");
+        assert!(changes[2] < 1e-6, "{changes:?}");
         let bad = DenoiseParams {
             flat_skip_deg: f64::NAN,
             ..DenoiseParams::default()
