@@ -429,11 +429,7 @@ impl ConvexPolyhedron {
             if ring.len() < 3 {
                 return None;
             }
-            let centre = vec3::scale(
-                ring.iter()
-                    .fold([0.0; 3], |s, &c| vec3::add(s, corners[c].1)),
-                1.0 / ring.len() as f64,
-            );
+            let centre = centroid(ring.iter().map(|&c| corners[c].1));
             let u = vec3::normalize_or_zero(vec3::cross(
                 n,
                 if n[0].abs() < 0.9 {
@@ -488,15 +484,17 @@ impl ConvexPolyhedron {
     pub fn add_to(&self, m: &mut EditMesh) {
         let ids: Vec<u32> = self.vertices.iter().map(|&x| m.add_vertex(x)).collect();
         for f in &self.facets {
-            let centre = vec3::scale(
-                f.iter()
-                    .fold([0.0; 3], |s, &c| vec3::add(s, self.vertices[c])),
-                1.0 / f.len() as f64,
-            );
+            let centre = centroid(f.iter().map(|&c| self.vertices[c]));
             let c = m.add_vertex(centre);
             for a in 0..f.len() {
                 m.add_face([c, ids[f[a]], ids[f[(a + 1) % f.len()]]], 0);
             }
         }
     }
+}
+
+/// The mean of `points`.
+fn centroid(points: impl ExactSizeIterator<Item = Vec3>) -> Vec3 {
+    let count = points.len() as f64;
+    vec3::scale(points.fold([0.0; 3], vec3::add), 1.0 / count)
 }

@@ -111,20 +111,14 @@ impl ShapeKind {
     /// # Errors
     /// [`VoxelError::InvalidParameter`] naming `kind`.
     pub fn from_name(name: &str) -> Result<ShapeKind, VoxelError> {
-        let mut kinds = ALL_KINDS.iter().chain(&NAMED_KINDS);
-        kinds
+        let kinds = || ALL_KINDS.into_iter().chain(NAMED_KINDS);
+        kinds()
             .find(|k| k.name() == name)
-            .copied()
             .ok_or_else(|| VoxelError::InvalidParameter {
                 name: "kind",
                 message: format!(
                     "unknown shape kind {name:?} (expected one of {})",
-                    ALL_KINDS
-                        .iter()
-                        .chain(&NAMED_KINDS)
-                        .map(|k| k.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    kinds().map(|k| k.name()).collect::<Vec<_>>().join(", ")
                 ),
             })
     }
