@@ -1,6 +1,6 @@
 //! Errors of `normalnet-denoise`: unknown names, bad parameters (naming the
-//! method and the parameter), a missing ground truth, and the errors of the
-//! methods themselves.
+//! method and the parameter), a missing ground truth, a mesh too large for
+//! f64, and the errors of the methods themselves.
 
 /// Everything that can go wrong in choosing or running a denoiser.
 #[derive(Debug, thiserror::Error)]
@@ -26,6 +26,16 @@ pub enum DenoiseError {
     NeedsGroundTruth {
         /// the method's name
         method: &'static str,
+    },
+    /// The mesh's bounding box overflows f64 (its diagonal is infinite):
+    /// no exact change of unit brings it into range.
+    #[error(
+        "the mesh's extent overflows f64 (coordinates up to {largest:e}, bounding-box diagonal \
+         infinite): scale it down before denoising"
+    )]
+    ExtentOverflow {
+        /// the largest absolute coordinate
+        largest: f64,
     },
     /// A classical filter failed.
     #[error(transparent)]

@@ -28,11 +28,13 @@ pub mod normalnet;
 pub mod oracle;
 pub mod params;
 pub mod registry;
+mod scale;
 
 pub use error::DenoiseError;
 pub use params::Params;
 pub use registry::{Kind, METHODS, Method, MethodInfo, Outcome, find, names};
 
+use normalnet_mesh::scale::pow2_scaled;
 use normalnet_mesh::{Mesh, Progress};
 use serde_json::Value;
 
@@ -88,6 +90,24 @@ impl Denoiser {
     /// Denoises `mesh`. `gt` (the clean mesh, face by face) is read only by
     /// the oracle. The result keeps the input's vertex and face order;
     /// outlier vertices stay in place.
+    ///
+    /// # Extreme scales
+    /// Every method measures normals and areas through products of lengths
+    /// (~L⁴), which underflow or overflow for a mesh at ~1e-80 or ~1e80.
+    /// A mesh whose bounding-box diagonal lies outside
+    /// [`normalnet_mesh::scale::SAFE_DIAGONAL_MIN`] ..=
+    /// [`normalnet_mesh::scale::SAFE_DIAGONAL_MAX`] (`2^-40 ≈ 9.1e-13` to
+    /// `2^40 ≈ 1.1e12`) is therefore denoised in another unit: its positions
+    /// (and `gt`'s) times an exact power of two `2^k` chosen so that the
+    /// mesh's robust radius (ignoring 1 % of the vertices, so that a stray
+    /// vertex does not set the unit) is ~1, the result times `2^-k`. Multiplying by a power of two is exact (barring
+    /// subnormal results), and every method parameter is relative (to `d_s`,
+    /// `l_e`, `l_e²`, or an angle), so the result is the one the method gives
+    /// the mesh in that unit, scaled back. A mesh inside the range is
+    /// denoised as it is: its results keep their bits.
+    ///
+    /// # Errors
+    /// As [`Denoiser::run`].
     pub fn denoise(
         &self,
         mesh: &Mesh,
@@ -98,7 +118,14 @@ impl Denoiser {
     }
 
     /// [`Denoiser::denoise`] that also returns what the method reports
-    /// (NormalNet: seconds per stage).
+    /// (NormalNet: seconds per stage). The one entry point of every method:
+    /// extreme scales are handled here (see [`Denoiser::denoise`]).
+    ///
+    /// # Errors
+    /// [`DenoiseError::NeedsGroundTruth`] for the oracle without `gt`;
+    /// [`DenoiseError::ExtentOverflow`] when the mesh's bounding-box
+    /// diagonal overflows f64 (coordinates of both signs near ±1.8e308);
+    /// whatever the method returns.
     pub fn run(
         &self,
         mesh: &Mesh,
@@ -110,7 +137,16 @@ impl Denoiser {
                 method: self.info.name,
             });
         }
-        self.method.run(mesh, gt, progress)
+        let Some(k) = scale::working_exponent(mesh)? else {
+            return self.method.run(mesh, gt, progress);
+        };
+        let scaled = |m: &Mesh| m.with_positions(pow2_scaled(&m.positions, k));
+        let gt = gt.map(scaled);
+        let mut outcome = self.method.run(&scaled(mesh), gt.as_ref(), progress)?;
+        outcome.mesh = outcome
+            .mesh
+            .with_positions(pow2_scaled(&outcome.mesh.positions, -k));
+        Ok(outcome)
     }
 }
 

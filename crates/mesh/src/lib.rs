@@ -16,6 +16,7 @@ pub mod metrics;
 pub mod noise;
 pub mod outliers;
 pub mod progress;
+pub mod scale;
 pub mod topology;
 pub mod validate;
 pub mod vec3;

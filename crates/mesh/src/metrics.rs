@@ -26,6 +26,7 @@ use crate::error::MeshError;
 use crate::geometry::{face_areas, face_normals};
 use crate::mesh::Mesh;
 use crate::progress::{NoProgress, Progress};
+use crate::scale::{bounding_box_diagonal, mul_pow2, normalising_exponent, pow2_scaled};
 use crate::vec3::{self, Vec3};
 use rayon::prelude::*;
 
@@ -121,6 +122,12 @@ fn check_counts(gt: &Mesh, result: &Mesh) -> Result<(), MeshError> {
 /// A result of zero total area (every face degenerate) has no area weights:
 /// `E_v` and the mean distance then weight its used vertices equally.
 ///
+/// When the ground truth's bounding-box diagonal lies outside
+/// [`crate::scale::SAFE_DIAGONAL_MIN`] ..= [`crate::scale::SAFE_DIAGONAL_MAX`],
+/// both meshes are measured scaled by the same exact power of two (the
+/// diagonal ~1) and the distances and lengths are scaled back: a pair at
+/// 1e-80 gets its true `E_a`, not 90° for every face.
+///
 /// # Errors
 /// [`MeshError::Mismatch`] when the face counts differ;
 /// [`MeshError::InvalidParameter`] when the ground truth has zero mean edge
@@ -139,6 +146,21 @@ pub fn compare_with_progress(
     progress: &dyn Progress,
 ) -> Result<Metrics, MeshError> {
     check_counts(gt, result)?;
+    if let Some(k) = normalising_exponent(bounding_box_diagonal(gt)) {
+        let scaled = |m: &Mesh| m.with_positions(pow2_scaled(&m.positions, k));
+        let m = compare_with_progress(&scaled(gt), &scaled(result), progress)?;
+        let back = |x: f64| mul_pow2(x, -k);
+        return Ok(Metrics {
+            e_v: back(m.e_v),
+            mean_dist: back(m.mean_dist),
+            max_dist_result_to_gt: back(m.max_dist_result_to_gt),
+            max_dist_gt_to_result: back(m.max_dist_gt_to_result),
+            hausdorff: back(m.hausdorff),
+            gt_mean_edge_length: back(m.gt_mean_edge_length),
+            gt_bbox_diag: back(m.gt_bbox_diag),
+            ..m
+        });
+    }
     let nf = gt.num_faces();
     progress.start("metrics", 4);
     let (theta, flipped_faces) = {
@@ -392,6 +414,43 @@ mod tests {
         assert!((r.e_a_deg - 45.0).abs() < 1e-12);
         assert_eq!(r.flipped_faces, 1);
         assert!(!r.faces_identical);
+    }
+
+    /// The audit's extreme scales: a pair times 1e±80 gets the unscaled
+    /// angles and scaled distances, not 90° for every face.
+    #[test]
+    fn extreme_scales_give_the_unscaled_metrics_scaled() {
+        let m = tetra();
+        let moved = m.with_positions(
+            m.positions
+                .iter()
+                .enumerate()
+                .map(|(i, p)| [p[0] + 0.01 * i as f64, p[1], p[2] - 0.02])
+                .collect(),
+        );
+        let r = compare(&m, &moved).unwrap();
+        for s in [1e-80, 1e80, 1e-200, 1e200] {
+            let scaled =
+                |x: &Mesh| x.with_positions(x.positions.iter().map(|p| p.map(|c| c * s)).collect());
+            let q = compare(&scaled(&m), &scaled(&moved)).unwrap();
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+            assert!(
+                close(q.e_a_deg, r.e_a_deg),
+                "{s:e}: {} {}",
+                q.e_a_deg,
+                r.e_a_deg
+            );
+            assert_eq!(q.degenerate_faces_result, 0);
+            for (a, b) in [
+                (q.e_v, r.e_v),
+                (q.hausdorff, r.hausdorff),
+                (q.gt_mean_edge_length, r.gt_mean_edge_length),
+                (q.gt_bbox_diag, r.gt_bbox_diag),
+            ] {
+                assert!(close(a, b * s), "{s:e}: {a:e} vs {:e}", b * s);
+            }
+            assert!(close(q.e_v_over_le, r.e_v_over_le));
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@
 
 use crate::geometry::{FaceGeometry, mean_centre_distance, mean_edge_length};
 use crate::mesh::Mesh;
+use crate::scale::{diagonal_length, mul_pow2, normalising_exponent, pow2_scaled};
 use crate::topology::Topology;
 use crate::vec3::{self, Vec3};
 
@@ -25,13 +26,15 @@ pub struct MeshReport {
     pub bbox_min: Vec3,
     /// bounding box maximum
     pub bbox_max: Vec3,
-    /// bounding box diagonal length
+    /// bounding box diagonal length (infinite only when an extent overflows
+    /// f64, coordinates of both signs near ±1.8e308)
     pub bbox_diagonal: f64,
     /// `l_e`: mean unique-edge length
     pub mean_edge_length: f64,
     /// `d_s`: mean distance between centres of edge-adjacent faces
     pub mean_centre_distance: f64,
-    /// total surface area
+    /// total surface area (infinite when it exceeds f64's 1.8e308, i.e.
+    /// coordinates beyond ~1e154)
     pub area: f64,
     /// edges with exactly one face
     pub boundary_edges: usize,
@@ -115,9 +118,29 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
 }
 
 /// Builds the report from an existing topology of `mesh`.
+///
+/// A mesh whose bounding-box diagonal lies outside
+/// [`crate::scale::SAFE_DIAGONAL_MIN`] ..= [`crate::scale::SAFE_DIAGONAL_MAX`]
+/// is measured in a copy scaled by an exact power of two (diagonal ~1) and
+/// its lengths and area are scaled back, so that a valid mesh at 1e-80 or
+/// 1e80 reports its true `l_e`, `d_s`, area and no degenerate faces.
 pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
-    let geo = FaceGeometry::new(mesh);
     let (lo, hi) = mesh.bounding_box();
+    let bbox_diagonal = diagonal_length(lo, hi);
+    // A mesh at an extreme scale is measured in a frame scaled by 2^k, its
+    // diagonal ~1 (exact: `crate::scale`), and its lengths scaled back; a
+    // mesh in the safe range is measured as it is.
+    let k = normalising_exponent(bbox_diagonal);
+    let scaled;
+    let frame = match k {
+        Some(k) => {
+            scaled = mesh.with_positions(pow2_scaled(&mesh.positions, k));
+            &scaled
+        }
+        None => mesh,
+    };
+    let k = k.unwrap_or(0);
+    let geo = FaceGeometry::new(frame);
     let mut used = vec![false; mesh.num_vertices()];
     for t in &mesh.faces {
         for &v in t {
@@ -174,10 +197,10 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
         edges: topo.edges.len(),
         bbox_min: lo,
         bbox_max: hi,
-        bbox_diagonal: vec3::norm(vec3::sub(hi, lo)),
-        mean_edge_length: mean_edge_length(mesh, topo),
-        mean_centre_distance: mean_centre_distance(topo, &geo.centres),
-        area: geo.areas.iter().sum(),
+        bbox_diagonal,
+        mean_edge_length: mul_pow2(mean_edge_length(frame, topo), -k),
+        mean_centre_distance: mul_pow2(mean_centre_distance(topo, &geo.centres), -k),
+        area: mul_pow2(geo.areas.iter().sum(), -2 * k),
         boundary_edges: topo.edge_face_count.iter().filter(|&&c| c == 1).count(),
         non_manifold_edges: topo.edge_face_count.iter().filter(|&&c| c > 2).count(),
         non_manifold_vertices: non_manifold_vertices(&mesh.faces, topo).len(),
@@ -197,7 +220,7 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
         unreferenced_vertices: mesh.num_vertices() - referenced,
         components,
         euler_characteristic: referenced as i64 - topo.edges.len() as i64 + mesh.num_faces() as i64,
-        outlier_vertices: crate::outliers::outlier_vertices(mesh, &Default::default()).count(),
+        outlier_vertices: crate::outliers::outlier_vertices(frame, &Default::default()).count(),
     }
 }
 
@@ -306,6 +329,35 @@ mod tests {
         );
         assert_eq!(r.components, 1);
         assert!(r.warnings().is_empty());
+    }
+
+    /// The audit's extreme scales: a valid mesh times 1e±80 (and 1e200,
+    /// past the squares' overflow) reports its lengths and area scaled, no
+    /// degenerate face and nothing NaN or infinite.
+    #[test]
+    fn extreme_scales_report_scaled_lengths_not_degenerate_faces() {
+        let m = Mesh::height_grid(6, |i, j| 0.1 * ((i * 7 + j * 3) % 5) as f64);
+        let r = validate(&m);
+        for s in [1e-80, 1e80, 1e200, 1e-200] {
+            let big = m.with_positions(m.positions.iter().map(|p| p.map(|c| c * s)).collect());
+            let q = validate(&big);
+            assert_eq!(q.degenerate_faces, 0, "{s:e}");
+            assert_eq!(q.outlier_vertices, r.outlier_vertices, "{s:e}");
+            for (a, b, power) in [
+                (q.bbox_diagonal, r.bbox_diagonal, 1),
+                (q.mean_edge_length, r.mean_edge_length, 1),
+                (q.mean_centre_distance, r.mean_centre_distance, 1),
+                (q.area, r.area, 2),
+            ] {
+                let want = b * s.powi(power);
+                if want.is_finite() && want > 0.0 {
+                    assert!((a / want - 1.0).abs() < 1e-12, "{s:e}: {a:e} vs {want:e}");
+                } else {
+                    // 1e200² overflows: the area is honestly infinite
+                    assert_eq!(a, want, "{s:e}");
+                }
+            }
+        }
     }
 
     #[test]
