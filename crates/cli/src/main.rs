@@ -1,5 +1,9 @@
 //! `normalnet`: mesh denoising with NormalNet and the classical filters.
-//! One subcommand per file under `commands/`.
+//! One subcommand per file under `commands/`. Commands write their report
+//! to stdout through a handle (`writeln!`, not `println!`), so that a closed
+//! stdout (`normalnet info x.obj | head -1`) is an error the command returns
+//! and [`main`] ends quietly with 141 (128 + SIGPIPE, what a shell reports
+//! for a program the pipe killed), instead of a panic.
 
 mod commands;
 mod input;
@@ -7,6 +11,7 @@ mod output;
 mod progress;
 
 use clap::{Parser, Subcommand};
+use std::io::Write;
 
 /// Mesh denoising: NormalNet (learned normal filtering) and classical filters.
 #[derive(Parser)]
@@ -67,13 +72,16 @@ fn main() {
     // process's temporary files from the checked output folders, then exit
     // as a shell expects (128 + SIGINT). Best effort: without a handler the
     // signal kills the process as before.
+    // The message is best effort too: a closed stderr must not stop the
+    // exit (eprintln! would panic in the handler's thread).
     let _ = ctrlc::set_handler(|| {
         let removed = output::remove_temp_files();
-        if removed > 0 {
-            eprintln!("interrupted: removed {removed} temporary file(s)");
+        let mut err = std::io::stderr();
+        let _ = if removed > 0 {
+            writeln!(err, "interrupted: removed {removed} temporary file(s)")
         } else {
-            eprintln!("interrupted");
-        }
+            writeln!(err, "interrupted")
+        };
         std::process::exit(130);
     });
     let result = match cli.command {
@@ -97,9 +105,22 @@ fn main() {
         Command::Models(a) => commands::models::run(a, quiet),
     };
     if let Err(e) = result {
-        eprintln!("error: {}", error_chain(&e));
+        if is_broken_pipe(&e) {
+            // the reader of stdout is gone: nothing to tell, nobody to tell
+            std::process::exit(141);
+        }
+        let _ = writeln!(std::io::stderr(), "error: {}", error_chain(&e));
         std::process::exit(1);
     }
+}
+
+/// Whether `e` comes from writing to a closed pipe.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// The error and its causes, `: `-separated like anyhow's `{:#}`, without a

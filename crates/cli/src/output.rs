@@ -2,8 +2,9 @@
 //! folder, or an extension the command cannot write, is an error at once,
 //! not after an hour of denoising. Every command that writes a mesh or a
 //! picture calls [`check_file`] (or [`check_dir`] for an output folder)
-//! first; the folders checked are remembered so that an interruption can
-//! remove this process's temporary files from them ([`remove_temp_files`]).
+//! first, and [`check_not_input`] when it also reads meshes; the folders
+//! checked are remembered so that an interruption can remove this process's
+//! temporary files from them ([`remove_temp_files`]).
 
 use anyhow::bail;
 use std::path::{Path, PathBuf};
@@ -53,7 +54,43 @@ pub fn check_file(path: &Path, extensions: &[&str], what: &str) -> anyhow::Resul
         ),
     }
     normalnet_mesh::io::check_writable(path)?;
-    remember(&folder_of(path));
+    // a link is written through: the temporary file goes beside its target
+    remember(&folder_of(&normalnet_mesh::io::write_target(path)));
+    Ok(())
+}
+
+/// The file `path` names, links and `..` resolved, whether or not it exists
+/// yet (its folder resolved, then its name joined); `path` itself when even
+/// the folder cannot be resolved.
+pub fn canonical(path: &Path) -> PathBuf {
+    if let Ok(p) = std::fs::canonicalize(path) {
+        return p;
+    }
+    let target = normalnet_mesh::io::write_target(path);
+    match (
+        std::fs::canonicalize(folder_of(&target)),
+        target.file_name(),
+    ) {
+        (Ok(dir), Some(name)) => dir.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Refuses an output that is one of the `inputs` (same file after
+/// resolving links and `..`): the atomic write would silently replace the
+/// input the command reads.
+///
+/// # Errors
+/// A message naming both paths.
+pub fn check_not_input(output: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
+    let out = canonical(output);
+    if let Some(input) = inputs.iter().find(|i| canonical(i) == out) {
+        bail!(
+            "{}: is the input {}; writing it would overwrite the input (choose another output)",
+            output.display(),
+            input.display()
+        );
+    }
     Ok(())
 }
 
@@ -84,7 +121,7 @@ pub fn check_dir(dir: &Path) -> anyhow::Result<()> {
 }
 
 /// The folder a file is written in (`.` for a bare name).
-fn folder_of(path: &Path) -> PathBuf {
+pub fn folder_of(path: &Path) -> PathBuf {
     match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -159,6 +196,30 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("file")]);
+    }
+
+    /// Audit: `denoise io.obj io.obj` silently overwrote its input.
+    #[test]
+    fn an_output_that_is_an_input_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let input = d.join("in.obj");
+        std::fs::write(&input, b"v 0 0 0").unwrap();
+        std::fs::create_dir(d.join("sub")).unwrap();
+        let e = check_not_input(&input, &[&input]).unwrap_err();
+        assert!(format!("{e:#}").contains("overwrite the input"), "{e:#}");
+        // the same file under another spelling, or through a link
+        assert!(check_not_input(&d.join("sub/../in.obj"), &[&input]).is_err());
+        #[cfg(unix)]
+        {
+            let link = d.join("link.obj");
+            std::os::unix::fs::symlink("in.obj", &link).unwrap();
+            assert!(check_not_input(&link, &[&input]).is_err());
+            assert!(check_not_input(&input, &[&link]).is_err());
+        }
+        // a new file, or another one, is fine
+        check_not_input(&d.join("sub/in.obj"), &[&input]).unwrap();
+        check_not_input(&d.join("out.obj"), &[&input, &d.join("gt.obj")]).unwrap();
     }
 
     #[test]

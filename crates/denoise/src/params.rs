@@ -3,7 +3,8 @@
 //! the fields they want to change (CLI flags, `--param key=value`, bench
 //! settings, Python keyword arguments all become one), which is laid over
 //! the defaults key by key. Unknown keys and wrong types are errors naming
-//! the parameter and listing the known ones.
+//! the parameter and listing the known ones, and every pass count (a field
+//! named `*iterations`) is bounded by [`MAX_ITERATIONS`].
 
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -14,6 +15,11 @@ use crate::DenoiseError;
 /// Parameters given by a caller: field name → value.
 pub type Params = Map<String, Value>;
 
+/// The most passes a `*iterations` parameter may ask for (the defaults are
+/// 5 to 40): far beyond any useful count, and a typo or a `-1` cast to
+/// unsigned (18446744073709551615) is refused instead of running forever.
+pub const MAX_ITERATIONS: u64 = 100_000;
+
 /// The defaults of `P` as a JSON object.
 pub fn defaults_of<P: Default + Serialize>() -> Value {
     serde_json::to_value(P::default()).unwrap_or(Value::Null)
@@ -22,7 +28,8 @@ pub fn defaults_of<P: Default + Serialize>() -> Value {
 /// `given` laid over the defaults of `P`.
 ///
 /// # Errors
-/// [`DenoiseError::Parameter`] for an unknown key or a value of the wrong type.
+/// [`DenoiseError::Parameter`] for an unknown key, a value of the wrong type,
+/// or a pass count above [`MAX_ITERATIONS`].
 pub fn resolve<P: Default + Serialize + DeserializeOwned>(
     method: &'static str,
     given: &Params,
@@ -38,6 +45,14 @@ pub fn resolve<P: Default + Serialize + DeserializeOwned>(
             return Err(bad(format!(
                 "unknown parameter `{key}` (known: {})",
                 known.join(", ")
+            )));
+        }
+        if key.ends_with("iterations")
+            && let Some(n) = v.as_u64()
+            && n > MAX_ITERATIONS
+        {
+            return Err(bad(format!(
+                "`{key}` = {n}: at most {MAX_ITERATIONS} passes"
             )));
         }
         fields.insert(key.clone(), v.clone());
@@ -100,6 +115,20 @@ mod tests {
         let e = resolve::<GnfParams>("gnf", &wrong).unwrap_err().to_string();
         assert!(
             e.starts_with("gnf: bad parameter value") && e.contains("mu_g"),
+            "{e}"
+        );
+    }
+
+    /// Audit: `--vertex-iterations 18446744073709551615` ran forever.
+    #[test]
+    fn pass_counts_are_bounded() {
+        let mut given = Params::new();
+        given.insert("vertex_iterations".into(), MAX_ITERATIONS.into());
+        assert!(resolve::<GnfParams>("gnf", &given).is_ok());
+        given.insert("vertex_iterations".into(), u64::MAX.into());
+        let e = resolve::<GnfParams>("gnf", &given).unwrap_err().to_string();
+        assert!(
+            e.contains("`vertex_iterations` = 18446744073709551615: at most 100000"),
             "{e}"
         );
     }

@@ -56,21 +56,33 @@ pub(crate) fn check_range(
     strict_lo: bool,
 ) -> Result<(), FilterError> {
     let bad = |message: String| Err(FilterError::InvalidParameter { name, message });
+    let (v, lo_text, hi_text) = (show(value), lo.map(show), hi.map(show));
     if !value.is_finite() {
-        return bad(format!("{value} is not finite"));
+        return bad(format!("{v} is not finite"));
     }
-    if let Some(lo) = lo {
+    if let (Some(lo), Some(lo_text)) = (lo, lo_text) {
         if strict_lo && value <= lo {
-            return bad(format!("{value} must be greater than {lo}"));
+            return bad(format!("{v} must be greater than {lo_text}"));
         }
         if !strict_lo && value < lo {
-            return bad(format!("{value} must be at least {lo}"));
+            return bad(format!("{v} must be at least {lo_text}"));
         }
     }
-    if let Some(hi) = hi
+    if let (Some(hi), Some(hi_text)) = (hi, hi_text)
         && value > hi
     {
-        return bad(format!("{value} must be at most {hi}"));
+        return bad(format!("{v} must be at most {hi_text}"));
     }
     Ok(())
+}
+
+/// `x` for a message: plain (`0.35`, `1000`), or in exponent form when the
+/// plain one runs long (`1e300`, not three hundred digits).
+fn show(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() > 12 {
+        format!("{x:e}")
+    } else {
+        plain
+    }
 }

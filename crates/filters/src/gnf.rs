@@ -49,7 +49,7 @@ pub struct GnfParams {
     /// kernel G_d in units of the current mean centre distance d_s; default 1.0.
     pub sigma_s_over_ds: f64,
     /// Radius of the geometric neighbourhood N(i) in units of the input's d_s;
-    /// default 2.0.
+    /// must be > 0; default 2.0.
     pub radius_over_ds: f64,
     /// N_f: number of normal-filtering passes; default 20.
     pub normal_iterations: usize,
@@ -85,13 +85,7 @@ impl GnfParams {
             None,
             true,
         )?;
-        check_range(
-            "radius_over_ds",
-            self.radius_over_ds,
-            Some(0.0),
-            None,
-            false,
-        )?;
+        check_range("radius_over_ds", self.radius_over_ds, Some(0.0), None, true)?;
         Ok(())
     }
 }
@@ -406,6 +400,16 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .contains("sigma_s_over_ds")
+        );
+        // Audit: a zero radius was accepted and filtered nothing.
+        let p = GnfParams {
+            radius_over_ds: 0.0,
+            ..Default::default()
+        };
+        let e = p.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("radius_over_ds") && e.contains("greater than 0"),
+            "{e}"
         );
     }
 }

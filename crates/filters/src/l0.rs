@@ -52,7 +52,8 @@ pub struct L0Params {
     pub lambda_over_le2: f64,
     /// β_0: initial weight of the coupling term; default 0.001.
     pub beta0: f64,
-    /// β_max: the iteration stops once β exceeds it; default 1000.
+    /// β_max: the iteration stops once β exceeds it; default 1000, at most
+    /// [`BETA_MAX_LIMIT`].
     pub beta_max: f64,
     /// κ: growth factor of β per iteration; default 1.414.
     pub kappa: f64,
@@ -76,6 +77,13 @@ impl Default for L0Params {
     }
 }
 
+/// The largest β_max [`L0Params::validate`] accepts. The p-step solves
+/// `(I + αRᵀR + βDᵀD) p = …` with dimensionless `D`: as β grows the identity
+/// drowns in the singular `βDᵀD` and the Cholesky factorisation loses
+/// positive pivots (past 1e16 on a 300-face sphere: 1e20 fails); 1e8 keeps
+/// eight digits of margin and is 1e5 times the paper's 1000.
+pub const BETA_MAX_LIMIT: f64 = 1e8;
+
 impl L0Params {
     /// Checks every field; the error names the field.
     pub fn validate(&self) -> Result<(), FilterError> {
@@ -87,7 +95,13 @@ impl L0Params {
             false,
         )?;
         check_range("beta0", self.beta0, Some(0.0), None, true)?;
-        check_range("beta_max", self.beta_max, Some(self.beta0), None, false)?;
+        check_range(
+            "beta_max",
+            self.beta_max,
+            Some(self.beta0),
+            Some(BETA_MAX_LIMIT),
+            false,
+        )?;
         check_range("kappa", self.kappa, Some(1.0), None, true)?;
         check_range(
             "alpha0_over_gamma",
@@ -450,5 +464,12 @@ mod tests {
                 .to_string()
                 .contains("lambda_over_le2")
         );
+        // Audit: β_max 1e300 passed and the Cholesky failed mid-run.
+        let p = L0Params {
+            beta_max: 1e300,
+            ..Default::default()
+        };
+        let e = p.validate().unwrap_err().to_string();
+        assert!(e.contains("beta_max") && e.contains("at most"), "{e}");
     }
 }

@@ -53,7 +53,7 @@ use rayon::prelude::*;
 #[serde(default, deny_unknown_fields)]
 pub struct VtParams {
     /// r / l_e: radius of the geometric neighbourhood in units of the
-    /// input's mean edge length; default 2.0.
+    /// input's mean edge length; must be > 0; default 2.0.
     pub radius_over_le: f64,
     /// ρ: a neighbour votes only if `n_i·n_j ≥ ρ` (local binary
     /// neighbourhood); default 0.5 (60°).
@@ -91,13 +91,7 @@ impl Default for VtParams {
 impl VtParams {
     /// Checks every field; the error names the field.
     pub fn validate(&self) -> Result<(), FilterError> {
-        check_range(
-            "radius_over_le",
-            self.radius_over_le,
-            Some(0.0),
-            None,
-            false,
-        )?;
+        check_range("radius_over_le", self.radius_over_le, Some(0.0), None, true)?;
         check_range("rho", self.rho, Some(-1.0), Some(1.0), false)?;
         check_range("tau", self.tau, Some(0.0), Some(1.0), true)?;
         Ok(())
@@ -382,6 +376,14 @@ mod tests {
             (
                 VtParams {
                     radius_over_le: f64::NAN,
+                    ..Default::default()
+                },
+                "radius_over_le",
+            ),
+            // Audit: a zero radius was accepted and voted with no neighbour.
+            (
+                VtParams {
+                    radius_over_le: 0.0,
                     ..Default::default()
                 },
                 "radius_over_le",

@@ -72,8 +72,10 @@ pub struct NoiseInfo {
 /// Adds noise to a clean mesh (connectivity unchanged).
 ///
 /// # Errors
-/// [`MeshError::InvalidParameter`] for a negative or non-finite level or a
-/// fraction outside `[0, 1]`.
+/// [`MeshError::InvalidParameter`] for a negative or non-finite level, a
+/// fraction outside `[0, 1]`, or a clean mesh of zero mean edge length
+/// (every face collapsed to a point: `σ = L·l_e` would be 0 and nothing
+/// would move).
 pub fn add_noise(clean: &Mesh, params: &NoiseParams) -> Result<Mesh, MeshError> {
     add_noise_with_info(clean, params).map(|(m, _)| m)
 }
@@ -103,6 +105,15 @@ pub fn add_noise_with_info(
     let n = clean.num_vertices();
     // l_e from the sorted unique edges (no full Topology needed).
     let le = crate::metrics::unique_edge_mean_length(clean);
+    if le.is_nan() || le <= 0.0 {
+        return Err(MeshError::InvalidParameter {
+            name: "clean mesh",
+            message: format!(
+                "mean edge length l_e is {le} (the vertices of every face coincide): \
+                 noise of sigma = L * l_e cannot move it"
+            ),
+        });
+    }
     let sigma = params.level * le;
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     let chosen: Vec<usize> = match params.impulsive_fraction {
@@ -284,5 +295,21 @@ mod tests {
             .unwrap_err();
             assert!(e.to_string().contains(name), "{e}");
         }
+    }
+
+    /// Audit: a mesh whose vertices all coincide got "81 of 81 vertices
+    /// moved" with sigma 0; it is refused.
+    #[test]
+    fn a_mesh_of_zero_edge_length_is_refused() {
+        let m = Mesh::height_grid(3, |_, _| 0.0);
+        let point = m.with_positions(vec![[1.0, 2.0, 3.0]; m.num_vertices()]);
+        let e = add_noise(&point, &NoiseParams::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("clean mesh") && e.contains("mean edge length"),
+            "{e}"
+        );
+        assert!(add_noise(&m, &NoiseParams::default()).is_ok());
     }
 }

@@ -5,10 +5,13 @@
 //! exists is skipped (outputs appear whole or not at all, so an interrupted
 //! run leaves none half-written); `--overwrite` redoes them. A file that
 //! cannot be read or denoised is reported in the summary and the run goes
-//! on. Progress over files with ETA on stderr; `DIR/batch_summary.csv` and
-//! `.json` list every input (faces, seconds, status done / skipped /
-//! failed, error), rewritten after each file.
+//! on; the command then ends with an error (exit status 1) naming how many
+//! failed. Progress over files with ETA on stderr; `DIR/batch_summary.csv`
+//! and `.json` list every input (faces, seconds, status done / skipped /
+//! failed, error), rewritten after each file. The output folder may not be
+//! the folder of an input (outputs would replace or join the inputs).
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -191,6 +194,18 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
     }
     let files = collect_inputs(&args.inputs)?;
+    let out_dir = output::canonical(&args.out);
+    if let Some(input) = files
+        .iter()
+        .find(|f| output::canonical(&output::folder_of(f)) == out_dir)
+    {
+        bail!(
+            "--out {}: is the folder of the input {}; outputs would replace or mix with the \
+             inputs (choose another folder)",
+            args.out.display(),
+            input.display()
+        );
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let denoiser = Denoiser::new(info.name, &given_params(&args.choice, info)?)?;
@@ -229,8 +244,12 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             row.status = "skipped";
         } else {
             let result = (|| -> anyhow::Result<()> {
+                output::check_not_input(&output, &[input])?;
+                normalnet_mesh::io::check_writable(&output)?;
                 let mesh = crate::input::read_mesh(input)?;
                 row.faces = Some(mesh.num_faces());
+                let format = super::info::format_for(&output, None)?;
+                normalnet_mesh::io::check_encodable(&output, &mesh, format)?;
                 let out = denoiser.denoise(&mesh, None, &NoProgress)?;
                 normalnet_mesh::write_mesh(&output, &out)?;
                 Ok(())
@@ -250,7 +269,9 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     bar.finish();
     let count = |s: &str| rows.iter().filter(|r| r.status == s).count();
-    println!(
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "{} files: {} done, {} skipped, {} failed in {:.1} s; summary in {}",
         rows.len(),
         count("done"),
@@ -258,7 +279,15 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         count("failed"),
         started.elapsed().as_secs_f64(),
         args.out.join("batch_summary.csv").display()
-    );
+    )?;
+    let failed = count("failed");
+    if failed > 0 {
+        bail!(
+            "{failed} of {} inputs failed (see {})",
+            rows.len(),
+            args.out.join("batch_summary.csv").display()
+        );
+    }
     Ok(())
 }
 

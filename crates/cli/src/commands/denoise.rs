@@ -16,17 +16,21 @@
 //! denoising and in place, and `--remove-outliers` drops them (and their
 //! faces) from the output instead.
 
+use super::info::format_for;
+use super::metrics::check_ground_truth;
 use crate::input::read_mesh;
 use crate::output;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
-use normalnet_denoise::params::parse_assignment;
+use normalnet_denoise::params::{MAX_ITERATIONS, parse_assignment};
 use normalnet_denoise::{Denoiser, METHODS, MethodInfo, Params};
+use normalnet_mesh::io::check_encodable;
 use normalnet_mesh::metrics::compare;
 use normalnet_mesh::outliers::{OutlierParams, outlier_vertices, without_vertices};
 use normalnet_mesh::{Mesh, write_mesh};
 use serde_json::{Value, json};
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Every registered name and alias, for `--method`.
@@ -65,6 +69,21 @@ fn method_help() -> String {
     format!("Denoising method:\n{}", lines.join("\n"))
 }
 
+/// Parses the number of a parameter flag, refusing NaN and infinities with
+/// a message clap prefixes with the flag (serde would otherwise turn them
+/// into `null`: "invalid type: null, expected f64").
+pub fn finite_number(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number, got {text:?}"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number, got {text:?}"))
+    }
+}
+
 /// The method and its parameters: shared by `denoise` and `batch`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct MethodArgs {
@@ -73,70 +92,70 @@ pub struct MethodArgs {
           value_parser = clap::builder::PossibleValuesParser::new(method_names()))]
     pub method: String,
     /// N_f.
-    #[arg(long, help = flag_help("iterations",
-        "Normal-filtering iterations N_f (normalnet: the most, see --auto-stop)"))]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("iterations", &format!(
+        "Normal-filtering iterations N_f, at most {MAX_ITERATIONS} (normalnet: the most, see --auto-stop)")))]
     pub iterations: Option<usize>,
     /// NormalNet's auto stop.
-    #[arg(long, help = flag_help("auto-stop",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("auto-stop",
         "NormalNet stops after an iteration whose normals turned less than this many degrees on average (0: always N_f iterations, the paper's pipeline)"))]
     pub auto_stop: Option<f64>,
     /// N_v.
-    #[arg(long, help = flag_help("vertex-iterations",
-        "Vertex-update passes N_v (per iteration; bnf/sun07: after all normal passes)"))]
+    #[arg(long, allow_negative_numbers = true, help = flag_help("vertex-iterations", &format!(
+        "Vertex-update passes N_v, at most {MAX_ITERATIONS} (per iteration; bnf/sun07: after all normal passes)")))]
     pub vertex_iterations: Option<usize>,
     /// μ_g.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("mu-g",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("mu-g",
         "μ_g: width of the guidance range kernel (normalnet: the nearest trained output)"))]
     pub mu_g: Option<f64>,
     /// σ_s / d_s.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("sigma-s",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("sigma-s",
         "Spatial kernel width σ_s in units of the mean centre distance d_s"))]
     pub sigma_s: Option<f64>,
     /// GNF radius / d_s.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("radius",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("radius",
         "Neighbourhood radius: gnf in units of d_s, vt (r) in units of the mean edge length l_e"))]
     pub radius: Option<f64>,
     /// BNF/BI σ_r.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("sigma-r",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("sigma-r",
         "σ_r: range kernel width on normal differences (bnf) or on the vertex-normal guidance (bi)"))]
     pub sigma_r: Option<f64>,
     /// BI σ_n.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("sigma-n",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("sigma-n",
         "BI σ_n: width of the kernel keeping a corner's vertex normal on its side of a feature"))]
     pub sigma_n: Option<f64>,
     /// VT ρ.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("rho",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("rho",
         "VT ρ: a neighbour votes only if n_i·n_j ≥ ρ"))]
     pub rho: Option<f64>,
     /// VT τ.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("tau",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("tau",
         "VT τ: binary-optimisation threshold on the normalised eigenvalues"))]
     pub tau: Option<f64>,
     /// Sun07 T.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("threshold",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("threshold",
         "Sun07 threshold T on n_i·n_j"))]
     pub threshold: Option<f64>,
     /// L0 λ / l_e².
-    #[arg(long, allow_negative_numbers = true, help = flag_help("lambda",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("lambda",
         "L0 λ in units of l_e² (mean edge length squared)"))]
     pub lambda: Option<f64>,
     /// L0 κ.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("kappa",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("kappa",
         "L0 κ: growth of β per iteration"))]
     pub kappa: Option<f64>,
     /// L0 β_0.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("beta0", "L0 β_0: initial β"))]
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("beta0", "L0 β_0: initial β"))]
     pub beta0: Option<f64>,
     /// L0 β_max.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("beta-max",
-        "L0 β_max: stop once β exceeds it"))]
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("beta-max",
+        "L0 β_max: stop once β exceeds it (at most 1e8)"))]
     pub beta_max: Option<f64>,
     /// L0 α_0 / γ̄.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("alpha0",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("alpha0",
         "L0 α_0 in units of the mean dihedral angle γ̄"))]
     pub alpha0: Option<f64>,
     /// L0 μ_α.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("alpha-decay",
+    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("alpha-decay",
         "L0 μ_α: decay of α per iteration"))]
     pub alpha_decay: Option<f64>,
     /// NormalNet model bundle folder (default: `$NORMALNET_MODEL`, else the
@@ -295,10 +314,20 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         );
     }
     output::check_file(&args.output, output::MESH, "output mesh")?;
+    let inputs: Vec<&Path> = std::iter::once(args.input.as_path())
+        .chain(args.gt.as_deref())
+        .collect();
+    output::check_not_input(&args.output, &inputs)?;
     // parameters checked and the model loaded before the mesh is read
     let denoiser = Denoiser::new(info.name, &given_params(&args.choice, info)?)?;
     let mesh =
         read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
+    check_encodable(&args.output, &mesh, format_for(&args.output, None)?).with_context(|| {
+        format!(
+            "{}: its coordinates do not fit the output format",
+            args.input.display()
+        )
+    })?;
     let (mesh, removed) = if args.remove_outliers {
         remove_outliers(mesh)
     } else {
@@ -324,15 +353,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 ),
                 None => gt,
             };
-            if gt.num_faces() != mesh.num_faces() {
-                bail!(
-                    "{}: {} faces, but {} has {}; metrics compare face by face",
-                    path.display(),
-                    gt.num_faces(),
-                    args.input.display(),
-                    mesh.num_faces()
-                );
-            }
+            check_ground_truth(path, &gt, &args.input, &mesh)?;
             Some(gt)
         }
         None => None,
@@ -353,6 +374,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     };
     let total_seconds = t_total.elapsed().as_secs_f64();
     let method = info.name;
+    let mut out = std::io::stdout().lock();
     if args.json {
         let v = json!({
             "input": args.input,
@@ -372,21 +394,23 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 "faces": r.faces,
             })),
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
-        println!(
+        writeln!(
+            out,
             "{} -> {}: {method}, {} vertices, {} faces, denoise {denoise_seconds:.3} s, total {total_seconds:.3} s",
             args.input.display(),
             args.output.display(),
             mesh.num_vertices(),
             mesh.num_faces()
-        );
-        println!("parameters: {parameters}");
+        )?;
+        writeln!(out, "parameters: {parameters}")?;
         if let Some(m) = metrics {
-            println!(
+            writeln!(
+                out,
                 "E_a {:.3}°  E_v {:.6} (E_v/l_e {:.4})  Hausdorff {:.6}",
                 m.e_a_deg, m.e_v, m.e_v_over_le, m.hausdorff
-            );
+            )?;
         }
     }
     Ok(())

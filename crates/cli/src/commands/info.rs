@@ -8,6 +8,7 @@ use crate::input::read_mesh_as;
 use anyhow::Context;
 use normalnet_mesh::io::Format;
 use normalnet_mesh::validate::validate;
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -48,6 +49,7 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
         .with_context(|| format!("reading {}", args.mesh.display()))?;
     let load = t.elapsed().as_secs_f64();
     let r = validate(&mesh);
+    let mut out = std::io::stdout().lock();
     if args.json {
         let v = serde_json::json!({
             "path": args.mesh,
@@ -56,33 +58,40 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
             "load_seconds": load,
             "seconds": t.elapsed().as_secs_f64(),
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
         return Ok(());
     }
     let [x0, y0, z0] = r.bbox_min;
     let [x1, y1, z1] = r.bbox_max;
-    println!("{}", args.mesh.display());
-    println!("  vertices               {}", r.vertices);
-    println!("  faces                  {}", r.faces);
-    println!("  edges                  {}", r.edges);
-    println!("  bounding box           [{x0}, {y0}, {z0}] .. [{x1}, {y1}, {z1}]");
-    println!("  bbox diagonal          {:.6}", r.bbox_diagonal);
-    println!("  mean edge length l_e   {:.6}", r.mean_edge_length);
-    println!("  mean centre dist d_s   {:.6}", r.mean_centre_distance);
-    println!("  surface area           {:.6}", r.area);
-    println!("  components             {}", r.components);
-    println!("  Euler characteristic   {}", r.euler_characteristic);
-    println!("  boundary edges         {}", r.boundary_edges);
-    println!("  non-manifold edges     {}", r.non_manifold_edges);
-    println!("  non-manifold vertices  {}", r.non_manifold_vertices);
-    println!("  misoriented edges      {}", r.misoriented_edges);
-    println!("  degenerate faces       {}", r.degenerate_faces);
-    println!("  duplicate faces        {}", r.duplicate_faces);
-    println!("  unreferenced vertices  {}", r.unreferenced_vertices);
-    println!("  outlier vertices       {}", r.outlier_vertices);
-    println!("  read in                {:.3} s", load);
+    writeln!(out, "{}", args.mesh.display())?;
+    writeln!(out, "  vertices               {}", r.vertices)?;
+    writeln!(out, "  faces                  {}", r.faces)?;
+    writeln!(out, "  edges                  {}", r.edges)?;
+    writeln!(
+        out,
+        "  bounding box           [{x0}, {y0}, {z0}] .. [{x1}, {y1}, {z1}]"
+    )?;
+    writeln!(out, "  bbox diagonal          {:.6}", r.bbox_diagonal)?;
+    writeln!(out, "  mean edge length l_e   {:.6}", r.mean_edge_length)?;
+    writeln!(
+        out,
+        "  mean centre dist d_s   {:.6}",
+        r.mean_centre_distance
+    )?;
+    writeln!(out, "  surface area           {:.6}", r.area)?;
+    writeln!(out, "  components             {}", r.components)?;
+    writeln!(out, "  Euler characteristic   {}", r.euler_characteristic)?;
+    writeln!(out, "  boundary edges         {}", r.boundary_edges)?;
+    writeln!(out, "  non-manifold edges     {}", r.non_manifold_edges)?;
+    writeln!(out, "  non-manifold vertices  {}", r.non_manifold_vertices)?;
+    writeln!(out, "  misoriented edges      {}", r.misoriented_edges)?;
+    writeln!(out, "  degenerate faces       {}", r.degenerate_faces)?;
+    writeln!(out, "  duplicate faces        {}", r.duplicate_faces)?;
+    writeln!(out, "  unreferenced vertices  {}", r.unreferenced_vertices)?;
+    writeln!(out, "  outlier vertices       {}", r.outlier_vertices)?;
+    writeln!(out, "  read in                {:.3} s", load)?;
     for w in r.warnings() {
-        println!("warning: {w}");
+        writeln!(out, "warning: {w}")?;
     }
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! training data, per-network validation errors) — the built-in one by
 //! default — and `normalnet models convert` for bundles of format 1.
 
+use std::io::Write;
 use std::path::PathBuf;
 
 use normalnet_denoise::normalnet::NormalnetParams;
@@ -45,10 +46,11 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
         ..NormalnetParams::default()
     }
     .load_bundle()?;
+    let mut out = std::io::stdout().lock();
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&bundle.manifest)?);
+        writeln!(out, "{}", serde_json::to_string_pretty(&bundle.manifest)?)?;
     } else {
-        print!("{}", describe(&bundle));
+        write!(out, "{}", describe(&bundle))?;
     }
     Ok(())
 }
@@ -129,14 +131,16 @@ fn convert(from: &std::path::Path, to: &std::path::Path) -> anyhow::Result<()> {
     let manifest = normalnet_net::convert::convert_format1(from, to)
         .with_context(|| format!("converting {} into {}", from.display(), to.display()))?;
     let bundle = Bundle::load(to).with_context(|| format!("reading back {}", to.display()))?;
-    println!(
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "{} ({} preset) converted to format {} in {}",
         from.display(),
         manifest.preset,
         manifest.format,
         to.display()
-    );
-    print!("{}", describe(&bundle));
+    )?;
+    write!(out, "{}", describe(&bundle))?;
     Ok(())
 }
 

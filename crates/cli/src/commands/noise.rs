@@ -5,7 +5,7 @@
 use super::info::{format_for, parse_format};
 use crate::input::read_mesh_as;
 use anyhow::Context;
-use normalnet_mesh::io::{Format, WriteOptions, write_mesh_as};
+use normalnet_mesh::io::{Format, WriteOptions, check_encodable, write_mesh_as};
 use normalnet_mesh::noise::{NoiseDirection, NoiseParams, add_noise_with_info};
 use std::path::PathBuf;
 
@@ -17,10 +17,10 @@ pub struct Args {
     /// Noisy output mesh (format from the extension; written atomically).
     pub output: PathBuf,
     /// Noise level L: σ = L · mean edge length [default: 0.3].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub level: Option<f64>,
     /// Impulsive noise: move only this fraction of the vertices (0..1).
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true)]
     pub impulsive: Option<f64>,
     /// Displacement direction [default: normal].
     #[arg(long, value_enum)]
@@ -48,9 +48,16 @@ pub enum Direction {
 /// Runs `normalnet noise`.
 pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     crate::output::check_file(&args.output, crate::output::MESH, "output mesh")?;
+    crate::output::check_not_input(&args.output, &[&args.input])?;
     let clean = read_mesh_as(&args.input, format_for(&args.input, args.format)?)
         .with_context(|| format!("reading {}", args.input.display()))?;
     let out_format = format_for(&args.output, None)?;
+    check_encodable(&args.output, &clean, out_format).with_context(|| {
+        format!(
+            "{}: its coordinates do not fit the output format",
+            args.input.display()
+        )
+    })?;
     let defaults = NoiseParams::default();
     let params = NoiseParams {
         level: args.level.unwrap_or(defaults.level),
@@ -62,7 +69,8 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
         },
         seed: args.seed,
     };
-    let (noisy, info) = add_noise_with_info(&clean, &params)?;
+    let (noisy, info) = add_noise_with_info(&clean, &params)
+        .with_context(|| format!("adding noise to {}", args.input.display()))?;
     write_mesh_as(
         &args.output,
         &noisy,

@@ -5,6 +5,7 @@
 
 use anyhow::Context;
 use normalnet_net::training::{TrainConfig, train};
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `normalnet train`.
@@ -90,9 +91,10 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
     let text = serde_json::to_string(&model)?;
     normalnet_mesh::io::write_atomically(&path, |w| w.write_all(text.as_bytes()))
         .with_context(|| format!("writing {}", path.display()))?;
-    println!("CNR model written to {}", path.display());
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "CNR model written to {}", path.display())?;
     for line in &model.training {
-        println!("  {line}");
+        writeln!(out, "  {line}")?;
     }
     Ok(())
 }
@@ -113,9 +115,11 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let bar = crate::progress::Bar::new(quiet);
     let manifest = train(&config, &args.out, args.resume, &bar)
         .with_context(|| format!("training into {}", args.out.display()))?;
-    println!("bundle written to {}", args.out.display());
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "bundle written to {}", args.out.display())?;
     for n in &manifest.networks {
-        println!(
+        writeln!(
+            out,
             "  {} iterations {:?}: {} steps, validation {:.2}° (input {:.2}°), {:.0} s",
             n.file,
             n.interval,
@@ -123,7 +127,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             n.validation_error_deg,
             n.validation_baseline_deg,
             n.train_seconds
-        );
+        )?;
     }
     Ok(())
 }

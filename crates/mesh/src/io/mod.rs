@@ -20,7 +20,9 @@
 //! - writers print coordinates in the shortest decimal form that reads back
 //!   to the same `f64` (text formats), or the exact bits (binary PLY); STL is
 //!   f32 by definition. Output is written to a temporary file in the target
-//!   directory and renamed into place, so a crash never leaves half a mesh.
+//!   directory and renamed into place, so a crash never leaves half a mesh;
+//!   an output that is a symbolic link is written through (its target gets
+//!   the mesh, the link stays) and a read-only output file is refused.
 
 mod obj;
 mod off;
@@ -174,6 +176,24 @@ fn write_format(
     }
 }
 
+/// Checks, before any work, that `format` can hold `mesh`: STL stores f32,
+/// so every coordinate must lie within its range (the text formats and PLY
+/// hold any f64). `path` is the output, named in the error.
+///
+/// # Errors
+/// [`MeshError::Io`] (`InvalidData`) naming `path` and the first vertex out
+/// of range, as [`write_mesh_as`] would fail.
+pub fn check_encodable(path: &Path, mesh: &Mesh, format: Format) -> Result<(), MeshError> {
+    match format {
+        Format::Stl => stl::check_range(mesh),
+        Format::Obj | Format::Off | Format::Ply => Ok(()),
+    }
+    .map_err(|source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 /// Encodes a mesh into memory (what [`write_mesh_as`] would write).
 ///
 /// # Errors
@@ -197,6 +217,33 @@ fn target_dir(path: &Path) -> PathBuf {
     }
 }
 
+/// The file a write to `path` replaces: `path`, or, when `path` is a
+/// symbolic link, the file it points to (followed through up to 40 links;
+/// the target need not exist yet). Writing there keeps the link a link.
+pub fn write_target(path: &Path) -> PathBuf {
+    let mut target = path.to_path_buf();
+    for _ in 0..40 {
+        let Ok(next) = std::fs::read_link(&target) else {
+            break;
+        };
+        // a relative link is relative to the folder holding it
+        target = match target.parent() {
+            Some(dir) => dir.join(next),
+            None => next,
+        };
+    }
+    target
+}
+
+/// Whether `path` is an existing file without write permission, which the
+/// atomic rename would replace anyway (and root could write).
+fn is_read_only(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.permissions().readonly())
+}
+
+/// The reason given for a read-only output file.
+const READ_ONLY: &str = "output not writable (read-only file)";
+
 /// Prefix of the temporary files of [`write_atomically`]:
 /// `.normalnet-<process id>-`, so that a process can find (and remove) its
 /// own leftovers after an interruption without touching another's.
@@ -206,13 +253,16 @@ pub fn temp_prefix() -> String {
 
 /// Checks, before any work, that [`write_atomically`] can write `path`: its
 /// folder exists and is a folder, a temporary file can be created in it
-/// (created and removed at once), and `path` itself is not a folder. The
-/// extension is not looked at (callers know which ones they write).
+/// (created and removed at once), and `path` itself is not a folder nor a
+/// read-only file. A symbolic link is checked at its target
+/// ([`write_target`]). The extension is not looked at (callers know which
+/// ones they write).
 ///
 /// # Errors
 /// [`MeshError::Io`] naming `path` or its folder, with the reason.
 pub fn check_writable(path: &Path) -> Result<(), MeshError> {
-    let dir = target_dir(path);
+    let target = write_target(path);
+    let dir = target_dir(&target);
     let fail = |p: &Path, kind: std::io::ErrorKind, why: String| MeshError::Io {
         path: p.to_path_buf(),
         source: std::io::Error::new(kind, why),
@@ -241,6 +291,13 @@ pub fn check_writable(path: &Path) -> Result<(), MeshError> {
             "is a folder, expected a file name".into(),
         ));
     }
+    if is_read_only(&target) {
+        return Err(fail(
+            path,
+            std::io::ErrorKind::PermissionDenied,
+            READ_ONLY.into(),
+        ));
+    }
     tempfile::Builder::new()
         .prefix(&temp_prefix())
         .suffix(".tmp")
@@ -257,7 +314,13 @@ pub fn check_writable(path: &Path) -> Result<(), MeshError> {
 
 /// Runs `body` on a buffered temporary file next to `path`, then renames the
 /// temporary file onto `path`. On any error the temporary file is removed
-/// (named [`temp_prefix`] + random + `.tmp`, in the folder of `path`).
+/// (named [`temp_prefix`] + random + `.tmp`, in the folder of `path`). A
+/// symbolic link `path` is written through: its target ([`write_target`])
+/// is replaced and the link stays.
+///
+/// # Errors
+/// [`MeshError::Io`] naming `path`: a read-only existing file (refused
+/// before `body` runs), or any error creating, writing or renaming.
 pub fn write_atomically(
     path: &Path,
     body: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
@@ -266,7 +329,14 @@ pub fn write_atomically(
         path: path.to_path_buf(),
         source,
     };
-    let dir = target_dir(path);
+    let target = write_target(path);
+    if is_read_only(&target) {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::PermissionDenied,
+            READ_ONLY,
+        )));
+    }
+    let dir = target_dir(&target);
     let tmp = tempfile::Builder::new()
         .prefix(&temp_prefix())
         .suffix(".tmp")
@@ -282,12 +352,12 @@ pub fn write_atomically(
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        let perm = std::fs::metadata(path)
+        let perm = std::fs::metadata(&target)
             .map(|m| m.permissions())
             .unwrap_or_else(|_| std::fs::Permissions::from_mode(0o644));
         tmp.as_file().set_permissions(perm).map_err(io)?;
     }
-    tmp.persist(path).map_err(|e| io(e.error))?;
+    tmp.persist(&target).map_err(|e| io(e.error))?;
     Ok(())
 }
 
@@ -330,14 +400,27 @@ pub(crate) fn parse_u64(tok: &[u8]) -> Option<u64> {
     Some(v)
 }
 
-/// Parses a signed integer from a token.
+/// Parses a signed integer from a token; `None` also when it lies outside
+/// the range of i64 (checked, never wrapped).
 #[inline]
 pub(crate) fn parse_i64(tok: &[u8]) -> Option<i64> {
     match tok.first() {
-        Some(b'-') => parse_u64(&tok[1..]).map(|v| -(v as i64)),
-        Some(b'+') => parse_u64(&tok[1..]).map(|v| v as i64),
-        _ => parse_u64(tok).map(|v| v as i64),
+        Some(b'-') => parse_u64(&tok[1..]).and_then(|v| 0i64.checked_sub_unsigned(v)),
+        Some(b'+') => parse_u64(&tok[1..]).and_then(|v| i64::try_from(v).ok()),
+        _ => parse_u64(tok).and_then(|v| i64::try_from(v).ok()),
     }
+}
+
+/// Whether a token is written as an integer (optional sign, then digits),
+/// whatever its size: tells an index out of range from one that is no
+/// number.
+#[inline]
+pub(crate) fn is_integer(tok: &[u8]) -> bool {
+    let digits = tok
+        .strip_prefix(b"-")
+        .or(tok.strip_prefix(b"+"))
+        .unwrap_or(tok);
+    !digits.is_empty() && digits.iter().all(u8::is_ascii_digit)
 }
 
 /// Lossy printable form of a token for error messages.

@@ -5,7 +5,7 @@
 //! case-insensitively; a line that does not start with a keyword (a letter
 //! followed by letters, digits or `_`) is refused with its line number.
 
-use super::{fan, lines, parse_f64, parse_i64, perr, show, tokens};
+use super::{fan, is_integer, lines, parse_f64, parse_i64, perr, show, tokens};
 use crate::error::MeshError;
 use crate::mesh::Mesh;
 use std::io::Write;
@@ -80,10 +80,15 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                 for t in tok {
                     let idx = t.split(|&b| b == b'/').next().unwrap_or(t);
                     let i = parse_i64(idx).ok_or_else(|| {
+                        let what = if is_integer(idx) {
+                            "vertex index out of range"
+                        } else {
+                            "bad vertex index"
+                        };
                         perr(
                             path,
                             ln,
-                            format!("face {}: bad vertex index {:?}", faces.len(), show(t)),
+                            format!("face {}: {what} {:?}", faces.len(), show(t)),
                         )
                     })?;
                     let abs = if i > 0 {
@@ -114,7 +119,11 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                         return Err(perr(
                             path,
                             ln,
-                            format!("face {}: vertex index {i} too large", faces.len()),
+                            format!(
+                                "face {}: vertex index out of range {:?}",
+                                faces.len(),
+                                show(t)
+                            ),
                         ));
                     }
                     if abs >= nv {

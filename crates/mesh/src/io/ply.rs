@@ -72,6 +72,8 @@ enum Encoding {
 
 struct Header {
     encoding: Encoding,
+    /// the line end: `\n` (also for `\r\n`), or `\r` (old Mac files)
+    eol: u8,
     elements: Vec<Element>,
     /// byte offset of the data
     data_start: usize,
@@ -83,15 +85,20 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
     if bytes.is_empty() {
         return Err(perr(path, 0, "no mesh in file: empty PLY file"));
     }
-    if !bytes.starts_with(b"ply\n") && !bytes.starts_with(b"ply\r\n") {
+    // The first line says how lines end: `ply\n`, `ply\r\n` or `ply\r`.
+    let eol = if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
+        b'\n'
+    } else if bytes.starts_with(b"ply\r") {
+        b'\r'
+    } else {
         return Err(perr(path, 1, "not a PLY file (first line must be \"ply\")"));
-    }
+    };
     let mut pos = 0;
     let mut ln = 0;
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
     loop {
-        let Some(nl) = bytes[pos..].iter().position(|&b| b == b'\n') else {
+        let Some(nl) = bytes[pos..].iter().position(|&b| b == eol) else {
             return Err(perr(path, ln + 1, "header ends without end_header"));
         };
         let line = &bytes[pos..pos + nl];
@@ -170,6 +177,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
     let encoding = encoding.ok_or_else(|| perr(path, ln, "header has no format line"))?;
     Ok(Header {
         encoding,
+        eol,
         elements,
         data_start: pos,
         lines: ln,
@@ -238,6 +246,7 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
             data: bytes,
             pos: h.data_start,
             line: h.lines + 1,
+            eol: h.eol,
         }),
         e => Box::new(Binary {
             data: bytes,
@@ -408,12 +417,18 @@ struct Ascii<'a> {
     data: &'a [u8],
     pos: usize,
     line: usize,
+    /// the line end of the header (`\r\n` counts as `\n`)
+    eol: u8,
 }
 
 impl<'a> Ascii<'a> {
     /// Next token on the current line, or None at the end of the line.
     fn token_on_line(&mut self) -> Option<&'a [u8]> {
-        while self.pos < self.data.len() && matches!(self.data[self.pos], b' ' | b'\t' | b'\r') {
+        // a `\r` is blank space before `\n`, or the line end itself
+        while self.pos < self.data.len()
+            && self.data[self.pos] != self.eol
+            && matches!(self.data[self.pos], b' ' | b'\t' | b'\r')
+        {
             self.pos += 1;
         }
         let start = self.pos;
@@ -430,7 +445,7 @@ impl<'a> Ascii<'a> {
     /// Skips blank lines; false at the end of data.
     fn skip_blank_lines(&mut self) -> bool {
         while self.pos < self.data.len() && self.data[self.pos].is_ascii_whitespace() {
-            if self.data[self.pos] == b'\n' {
+            if self.data[self.pos] == self.eol {
                 self.line += 1;
             }
             self.pos += 1;
@@ -441,7 +456,7 @@ impl<'a> Ascii<'a> {
 
 impl Source for Ascii<'_> {
     fn scalar(&mut self, t: Scalar) -> Result<f64, String> {
-        let at_line_start = self.pos == 0 || self.data[self.pos - 1] == b'\n';
+        let at_line_start = self.pos == 0 || self.data[self.pos - 1] == self.eol;
         if at_line_start && !self.skip_blank_lines() {
             return Err("data ends early (truncated file or wrong element count)".into());
         }
@@ -460,7 +475,7 @@ impl Source for Ascii<'_> {
             return Err(format!("unexpected extra value {:?} on the line", show(t)));
         }
         if self.pos < self.data.len() {
-            // at '\n'
+            // at the line end
             self.pos += 1;
             self.line += 1;
         }

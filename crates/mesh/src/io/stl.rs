@@ -248,9 +248,9 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     }
 }
 
-pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
-    // STL stores f32: a coordinate beyond its range would be written as an
-    // infinity that no reader (ours included) accepts.
+/// Checks that every coordinate fits STL's f32: one beyond its range would
+/// be written as an infinity that no reader (ours included) accepts.
+pub(super) fn check_range(mesh: &Mesh) -> std::io::Result<()> {
     for (v, p) in mesh.positions.iter().enumerate() {
         if let Some(x) = p.iter().find(|x| (**x as f32).is_infinite()) {
             return Err(std::io::Error::new(
@@ -263,6 +263,11 @@ pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
             ));
         }
     }
+    Ok(())
+}
+
+pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
+    check_range(mesh)?;
     let mut header = [b' '; 80];
     let text = b"binary STL written by normalnet";
     header[..text.len()].copy_from_slice(text);

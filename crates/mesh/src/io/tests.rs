@@ -605,3 +605,131 @@ fn stl_coordinates_beyond_f32_are_refused_when_read_and_when_written() {
     let obj = encode_mesh(&big, Format::Obj, &WriteOptions::default()).unwrap();
     assert_eq!(parse_mesh(&obj, Format::Obj, p()).unwrap(), big);
 }
+
+/// Audit: an OBJ face index beyond i64 wrapped to a bogus index (and
+/// `-9223372036854775808` overflowed on negation): now checked, and reported
+/// as out of range with the file and line.
+#[test]
+fn obj_huge_face_indices_are_out_of_range_not_wrapped() {
+    let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    for (index, want) in [
+        ("-9999999999999999999", "vertex index out of range"),
+        ("9999999999999999999", "vertex index out of range"),
+        ("99999999999999999999999", "vertex index out of range"),
+        ("4294967297", "vertex index out of range"),
+        (
+            "-9223372036854775808",
+            "relative index -9223372036854775808",
+        ),
+    ] {
+        let e = parse_obj(&format!("{head}f 1 2 {index}\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("test.obj:4: face 0: ") && e.contains(want),
+            "{index}: {e}"
+        );
+    }
+    assert_eq!(parse_i64(b"-9223372036854775808"), Some(i64::MIN));
+    assert_eq!(parse_i64(b"9223372036854775808"), None);
+    assert_eq!(parse_i64(b"+12"), Some(12));
+}
+
+/// Audit: a PLY with old-Mac `\r` line ends was refused as "not a PLY file"
+/// although every text format accepts them (module docs).
+#[test]
+fn ply_with_cr_line_ends_reads_like_lf() {
+    let plain = parse_obj(QUAD_OBJ).unwrap();
+    let ascii = encode_mesh(&plain, Format::Ply, &WriteOptions { ply_ascii: true }).unwrap();
+    let ascii = String::from_utf8(ascii).unwrap().replace('\n', "\r");
+    let (_dir, r) = read_temp("cr.ply", ascii.as_bytes());
+    assert_eq!(r.unwrap(), plain);
+    // binary data after a `\r` header (its bytes may contain 13 and 10)
+    let binary = encode_mesh(&plain, Format::Ply, &WriteOptions::default()).unwrap();
+    let end = b"end_header\n";
+    let split = binary.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+    let mut cr = binary[..split].to_vec();
+    cr.iter_mut().for_each(|b| {
+        if *b == b'\n' {
+            *b = b'\r';
+        }
+    });
+    cr.extend_from_slice(&binary[split..]);
+    assert_eq!(parse_mesh(&cr, Format::Ply, p()).unwrap(), plain);
+    // errors still name the line
+    let bad = ascii.replacen("1 1 0", "1 x 0", 1);
+    let e = parse_mesh(bad.as_bytes(), Format::Ply, Path::new("x.ply"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("x.ply:13: element vertex 2"), "{e}");
+}
+
+/// Audit: a read-only output file was replaced by the atomic rename, and a
+/// symbolic link output was replaced by a regular file.
+#[cfg(unix)]
+#[test]
+fn read_only_outputs_are_refused_and_links_written_through() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let m = parse_obj(QUAD_OBJ).unwrap();
+    let ro = dir.path().join("ro.obj");
+    std::fs::write(&ro, b"keep").unwrap();
+    std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o444)).unwrap();
+    for e in [
+        check_writable(&ro).unwrap_err(),
+        write_mesh(&ro, &m).unwrap_err(),
+    ] {
+        let e = e.to_string();
+        assert!(
+            e.contains("ro.obj") && e.contains("output not writable"),
+            "{e}"
+        );
+    }
+    assert_eq!(std::fs::read(&ro).unwrap(), b"keep");
+    // a link, relative to its folder, to a file that does not exist yet
+    let link = dir.path().join("link.obj");
+    std::os::unix::fs::symlink("target.obj", &link).unwrap();
+    check_writable(&link).unwrap();
+    write_mesh(&link, &m).unwrap();
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(read_mesh(dir.path().join("target.obj")).unwrap(), m);
+    // a link to a read-only file is refused like the file
+    let ro_link = dir.path().join("ro_link.obj");
+    std::os::unix::fs::symlink(&ro, &ro_link).unwrap();
+    assert!(check_writable(&ro_link).is_err() && write_mesh(&ro_link, &m).is_err());
+    assert_eq!(write_target(&ro_link), ro);
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(names.is_empty(), "{names:?}");
+}
+
+/// Audit: writing `.stl` from a mesh beyond f32's range failed only after
+/// the work; `check_encodable` says so before.
+#[test]
+fn check_encodable_refuses_stl_beyond_f32_only() {
+    let big = Mesh::new(
+        vec![[0.0; 3], [1e39, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    let out = Path::new("out.stl");
+    let e = check_encodable(out, &big, Format::Stl)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("out.stl") && e.contains("vertex 1") && e.contains("32-bit"),
+        "{e}"
+    );
+    for format in [Format::Obj, Format::Off, Format::Ply] {
+        check_encodable(out, &big, format).unwrap();
+    }
+    check_encodable(out, &parse_obj(QUAD_OBJ).unwrap(), Format::Stl).unwrap();
+}
