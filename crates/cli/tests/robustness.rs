@@ -4,6 +4,9 @@
 //! out-of-range parameters and a mesh collapsed to a point are refused (or
 //! handled) before any work, with a message naming the problem.
 
+mod common;
+
+use common::sphere;
 use normalnet_mesh::{Mesh, read_mesh, write_mesh};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
@@ -43,38 +46,6 @@ fn names(dir: &Path) -> Vec<String> {
         .collect();
     n.sort();
     n
-}
-
-/// A UV sphere, `rings` × `segs`, slightly bumpy.
-fn sphere(rings: usize, segs: usize) -> Mesh {
-    let mut p = vec![[0.0, 0.0, 1.0]];
-    for i in 1..rings {
-        let th = std::f64::consts::PI * i as f64 / rings as f64;
-        for j in 0..segs {
-            let ph = 2.0 * std::f64::consts::PI * j as f64 / segs as f64;
-            let r = 1.0 + 0.02 * ((7 * i + 13 * j) % 5) as f64;
-            p.push([
-                r * th.sin() * ph.cos(),
-                r * th.sin() * ph.sin(),
-                r * th.cos(),
-            ]);
-        }
-    }
-    p.push([0.0, 0.0, -1.0]);
-    let last = (p.len() - 1) as u32;
-    let id = |i: usize, j: usize| (1 + (i - 1) * segs + j % segs) as u32;
-    let mut f = Vec::new();
-    for j in 0..segs {
-        f.push([0, id(1, j), id(1, j + 1)]);
-        f.push([last, id(rings - 1, j + 1), id(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segs {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    Mesh::new(p, f).unwrap()
 }
 
 /// `mesh` with every vertex at one point (the faces kept).
