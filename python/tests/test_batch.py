@@ -37,7 +37,9 @@ def test_cli_batch_resumes_after_an_interruption(cli, tmp_path, example):
     # no partial file is left behind
     assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr
+    # every input processed; the broken one makes the batch exit 1
+    assert done.returncode == 1, done.stderr
+    assert "1 of 5 inputs failed" in done.stderr, done.stderr
     rows = json.loads((out / "batch_summary.json").read_text())
     status = {os.path.basename(r["input"]): r["status"] for r in rows}
     for name in finished_before:
