@@ -5,11 +5,11 @@
 
 mod common;
 
-use common::sphere;
+use common::{interrupt_and_wait, sphere};
 use normalnet_mesh::{Mesh, write_mesh};
 use std::path::Path;
 use std::process::{Command, Output};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 fn normalnet(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_normalnet"))
@@ -228,22 +228,7 @@ fn issue_14_interrupt_removes_temporary_files() {
         .join(format!(".normalnet-{}-abcdef.tmp", child.id()));
     std::fs::write(&leftover, b"half a mesh").unwrap();
     std::thread::sleep(Duration::from_millis(2000));
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            child.kill().unwrap();
-            panic!("normalnet did not stop on SIGINT");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let status = interrupt_and_wait(&mut child, "");
     assert_eq!(status.code(), Some(130));
     assert!(!leftover.exists(), "the temporary file was left behind");
     assert!(!out.exists());

@@ -6,11 +6,11 @@
 
 mod common;
 
-use common::sphere;
+use common::{interrupt_and_wait, sphere};
 use normalnet_mesh::{Mesh, read_mesh, write_mesh};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 fn normalnet(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_normalnet"))
@@ -99,22 +99,7 @@ fn an_interrupt_with_a_closed_stderr_still_exits() {
         .unwrap();
     drop(child.stderr.take());
     std::thread::sleep(Duration::from_millis(1500));
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            child.kill().unwrap();
-            panic!("normalnet did not stop on SIGINT with a closed stderr");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let status = interrupt_and_wait(&mut child, " with a closed stderr");
     assert_eq!(status.code(), Some(130));
     assert!(!out.exists());
 }

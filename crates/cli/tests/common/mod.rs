@@ -1,6 +1,8 @@
 //! Helpers shared by the CLI's integration tests (`mod common;`).
 
 use normalnet_mesh::Mesh;
+use std::process::{Child, Command, ExitStatus};
+use std::time::{Duration, Instant};
 
 /// A UV sphere, `rings` × `segs`, slightly bumpy (big enough for a slow
 /// denoise at 60 × 120).
@@ -33,4 +35,26 @@ pub fn sphere(rings: usize, segs: usize) -> Mesh {
         }
     }
     Mesh::new(p, f).unwrap()
+}
+
+/// Sends SIGINT to `child` and waits up to 30 s for it to exit; panics
+/// (after killing it) with "normalnet did not stop on SIGINT{what}" if it
+/// does not.
+pub fn interrupt_and_wait(child: &mut Child, what: &str) -> ExitStatus {
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let start = Instant::now();
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        if start.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap();
+            panic!("normalnet did not stop on SIGINT{what}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
