@@ -271,6 +271,44 @@ fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
                     ow += 1;
                     continue;
                 }
+                // 16 output channels: eight neighbours along W with every
+                // tap in range share each weight load (exact sums: the same
+                // bits as one by one); cubes outside the region are computed
+                // and then replaced by the background
+                if V == 1
+                    && ow + TILE <= m
+                    && rw == (0..k)
+                    && taps(ow + TILE - 1, s, p, k, n) == rw
+                    && (o..o + TILE).any(computed)
+                {
+                    let mut sums = [_mm512_setzero_si512(); TILE];
+                    for kd in rd.clone() {
+                        let id = od * s + kd - p;
+                        for kh in rh.clone() {
+                            let ih = oh * s + kh - p;
+                            let i = (id * n + ih) * n + ow * s - p;
+                            let first = (kd * k + kh) * k;
+                            let x = &input[i * cin..(i + (TILE - 1) * s + k) * cin];
+                            let wt = &c.w[first * cin * co..(first + k) * cin * co];
+                            // SAFETY: `x` holds the k taps of the TILE cubes
+                            // (`s · cin` apart) and `wt` the k taps' weights
+                            // (sliced above); the CPU has VNNI (caller).
+                            unsafe {
+                                tile_row_products(&mut sums, x.as_ptr(), wt.as_ptr(), groups, k, s)
+                            };
+                        }
+                    }
+                    for (t, sum) in sums.into_iter().enumerate() {
+                        let at = (o + t) * co;
+                        if computed(o + t) {
+                            finish(std::array::from_fn(|_| sum), &mut out[at..at + co]);
+                        } else if let Some(bg) = region.and_then(|r| r.background) {
+                            out[at..at + co].copy_from_slice(&bg[at..at + co]);
+                        }
+                    }
+                    ow += TILE;
+                    continue;
+                }
                 // two neighbours along W with the same taps share each
                 // weight load (the sums are exact: the same bits either way)
                 let pair =
@@ -330,6 +368,46 @@ fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
                     finish(sums, &mut out[at..at + co]);
                 }
                 ow += 1 + usize::from(pair);
+            }
+        }
+    }
+}
+
+/// Output cubes per W tile of [`tile_row_products`].
+const TILE: usize = 8;
+
+/// One (kd, kh) row of taps for [`TILE`] neighbouring output cubes with 16
+/// output channels: for each of the `k` W taps and input group, one weight
+/// load feeds [`TILE`] `vpdpbusd` (one per cube), [`TILE`] chains in flight.
+///
+/// # Safety
+/// `x` points to the input bytes of cubes `0 .. (TILE − 1)·s + k` (`4 ·
+/// groups` each, consecutive), `w` to `k · groups · 16 · 4` weight bytes;
+/// the CPU has AVX-512 F and VNNI.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
+#[inline]
+unsafe fn tile_row_products(
+    sums: &mut [std::arch::x86_64::__m512i; TILE],
+    x: *const u8,
+    w: *const i8,
+    groups: usize,
+    k: usize,
+    s: usize,
+) {
+    use std::arch::x86_64::*;
+    let cin = 4 * groups;
+    // SAFETY (all reads): kw < k and g < groups; cube t·s + kw ≤ (TILE −
+    // 1)·s + k − 1, inside `x`; weights (kw·groups + g)·64 + 64 ≤ k·groups·64.
+    unsafe {
+        for kw in 0..k {
+            for g in 0..groups {
+                let wv = _mm512_loadu_si512(w.add((kw * groups + g) * 64).cast());
+                for (t, sum) in sums.iter_mut().enumerate() {
+                    let at = (t * s + kw) * cin + 4 * g;
+                    let xv = _mm512_set1_epi32(x.add(at).cast::<i32>().read_unaligned());
+                    *sum = _mm512_dpbusd_epi32(*sum, xv, wv);
+                }
             }
         }
     }
