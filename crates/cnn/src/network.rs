@@ -52,14 +52,24 @@ impl FoldedLinear {
         self.run_plain(x, out);
     }
 
+    /// `x` `[k, inputs]` → `out` `[k, outputs]`: each weight row is read
+    /// once for the `k` samples; every sample sums in the same order as
+    /// alone (the same bits for any `k`).
     #[inline(always)]
     fn run_plain(&self, x: &[f32], out: &mut [f32]) {
-        out.copy_from_slice(&self.b);
-        for (i, &xv) in x.iter().enumerate() {
-            if xv != 0.0 {
-                let row = &self.w[i * self.outputs..(i + 1) * self.outputs];
-                for (o, &w) in out.iter_mut().zip(row) {
-                    *o += xv * w;
+        let no = self.outputs;
+        let ni = self.w.len() / no;
+        for o in out.chunks_exact_mut(no) {
+            o.copy_from_slice(&self.b);
+        }
+        for i in 0..ni {
+            let row = &self.w[i * no..(i + 1) * no];
+            for (xs, o) in x.chunks_exact(ni).zip(out.chunks_exact_mut(no)) {
+                let xv = xs[i];
+                if xv != 0.0 {
+                    for (o, &w) in o.iter_mut().zip(row) {
+                        *o += xv * w;
+                    }
                 }
             }
         }
@@ -131,7 +141,6 @@ struct Scratch {
     t: Vec<f32>,
     y: Vec<f32>,
     v: Vec<f32>,
-    w: Vec<f32>,
     /// cubes of the current activation whose receptive field is occupied
     near: Vec<bool>,
     near_a: Vec<bool>,
@@ -273,7 +282,7 @@ impl Cnn {
         cnn.run(
             &vec![0.0; cnn.grid_len()],
             &mut s,
-            &mut out,
+            Some(&mut out),
             Some(&mut background),
             None,
         );
@@ -367,19 +376,31 @@ impl Cnn {
     pub fn forward(&self, grids: &[f32], out: &mut [f32]) -> Result<(), CnnError> {
         self.check_buffers(grids, out)?;
         let (g, no) = (self.grid_len(), self.outputs());
-        // One contiguous run of samples per thread, so each thread allocates
-        // its buffers once per call (rayon's `for_each_init` would do it per
-        // split job).
-        let samples = grids.len() / g;
-        let per_thread = samples.div_ceil(rayon::current_num_threads()).max(1);
+        // Runs of a few samples, so that a thread slowed by other work (the
+        // voxelizer shares the cores) does not leave the others idle at the
+        // end of the batch; each run borrows a thread's buffers from a pool
+        // (at most one set per thread is allocated per call).
+        const RUN: usize = 8;
+        let pool = std::sync::Mutex::new(Vec::new());
+        let take = || {
+            let mut p = pool.lock().unwrap_or_else(|e| e.into_inner());
+            p.pop()
+        };
         grids
-            .par_chunks(per_thread * g)
-            .zip(out.par_chunks_mut(per_thread * no))
+            .par_chunks(RUN * g)
+            .zip(out.par_chunks_mut(RUN * no))
             .for_each(|(grids, out)| {
-                let mut s = self.scratch();
-                for (grid, o) in grids.chunks_exact(g).zip(out.chunks_exact_mut(no)) {
-                    self.run(grid, &mut s, o, None, None);
+                let mut s = take().unwrap_or_else(|| self.scratch());
+                // the convolutions sample by sample, the fully connected
+                // head for the whole run (each weight row read once)
+                let width = self.pooled_width();
+                let mut pooled = Vec::with_capacity(RUN * width);
+                for grid in grids.chunks_exact(g) {
+                    self.run(grid, &mut s, None, None, None);
+                    pooled.extend_from_slice(&s.v[..width]);
                 }
+                self.head(&pooled, out);
+                pool.lock().unwrap_or_else(|e| e.into_inner()).push(s);
             });
         Ok(())
     }
@@ -405,7 +426,6 @@ impl Cnn {
             t: vec![0.0; self.largest],
             y: vec![0.0; self.largest],
             v: vec![0.0; self.largest],
-            w: vec![0.0; self.largest],
             near: Vec::new(),
             near_a: Vec::new(),
             near_s: Vec::new(),
@@ -421,7 +441,7 @@ impl Cnn {
         &self,
         grid: &[f32],
         s: &mut Scratch,
-        out: &mut [f32],
+        out: Option<&mut [f32]>,
         mut record: Option<&mut Background>,
         mut profile: Option<&mut LayerTimes>,
     ) {
@@ -533,21 +553,36 @@ impl Cnn {
                 *p = p.max(v);
             }
         }
-        let mut width = c;
+        if let Some(out) = out {
+            self.head(&s.v[..c], out);
+        }
+        lap(usize::MAX, &mut profile);
+    }
+
+    /// Channels of the last block: the width of the pooled features.
+    fn pooled_width(&self) -> usize {
+        self.blocks.last().map_or(self.stem.cout, |b| b.a.cout)
+    }
+
+    /// The fully connected layers and tanh on the pooled features of `k`
+    /// samples (`pooled` `[k, width]`, `out` `[k, outputs]`).
+    fn head(&self, pooled: &[f32], out: &mut [f32]) {
+        let k = out.len() / self.outputs();
+        let mut x = pooled.to_vec();
+        let mut y = Vec::new();
         for l in &self.hidden {
-            let (input, output) = (&s.v[..width], &mut s.w[..l.outputs]);
-            l.run(input, output);
-            for v in output.iter_mut() {
+            y.clear();
+            y.resize(k * l.outputs, 0.0);
+            l.run(&x, &mut y);
+            for v in y.iter_mut() {
                 *v = v.max(0.0);
             }
-            std::mem::swap(&mut s.v, &mut s.w);
-            width = l.outputs;
+            std::mem::swap(&mut x, &mut y);
         }
-        self.output.run(&s.v[..width], out);
+        self.output.run(&x, out);
         for v in out.iter_mut() {
             *v = v.tanh();
         }
-        lap(usize::MAX, &mut profile);
     }
 
     /// [`Self::forward`] on one thread with a clock around every layer: the
@@ -564,7 +599,7 @@ impl Cnn {
         };
         let mut s = self.scratch();
         for (grid, o) in grids.chunks_exact(g).zip(out.chunks_exact_mut(no)) {
-            self.run(grid, &mut s, o, None, Some(&mut times));
+            self.run(grid, &mut s, Some(o), None, Some(&mut times));
         }
         Ok(times)
     }
