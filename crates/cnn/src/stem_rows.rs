@@ -80,17 +80,51 @@ impl Rows {
     /// The rows in bytes for [`run_int8`]; returns the scale s (value ≈
     /// (byte − 128) · s, s = largest |value| / 127, 1 for an all-zero grid).
     pub(crate) fn quantize(&mut self) -> f32 {
-        let max = self.values.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        let max = self
+            .values
+            .chunks_exact(16)
+            .fold([0.0f32; 16], |mut m, c| {
+                for (m, v) in m.iter_mut().zip(c) {
+                    *m = m.max(v.abs());
+                }
+                m
+            })
+            .into_iter()
+            .chain(
+                self.values
+                    .chunks_exact(16)
+                    .remainder()
+                    .iter()
+                    .map(|v| v.abs()),
+            )
+            .fold(0.0f32, f32::max);
         let scale = if max > 0.0 { max / 127.0 } else { 1.0 };
         let inv = 1.0 / scale;
-        let byte = |v: f32| ((v * inv).round().clamp(-127.0, 127.0) as i32 + 128) as u32;
+        let byte = |v: f32| (round_half_even(v * inv).clamp(-127, 127) + 128) as u32;
         self.bytes.clear();
-        self.bytes.extend(
-            self.values
-                .chunks_exact(CIN)
-                .map(|c| byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 128 << 24),
-        );
+        self.bytes.reserve(self.values.len() / CIN);
+        for c in self.values.chunks_exact(CIN) {
+            self.bytes
+                .push(byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 128 << 24);
+        }
         scale
+    }
+}
+
+/// `x` rounded to the nearest integer, halves to even: one `cvtss2si` on
+/// x86-64 (a library call through `f32::round`).
+#[inline(always)]
+fn round_half_even(x: f32) -> i32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvtss_si32, _mm_set_ss};
+        // SAFETY: SSE is part of every x86-64 CPU. The default MXCSR
+        // rounding: to nearest, ties to even.
+        unsafe { _mm_cvtss_si32(_mm_set_ss(x)) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        x.round_ties_even() as i32
     }
 }
 
