@@ -116,26 +116,24 @@ fn one_pass(name: &str, mesh: &Mesh, bundle: &Bundle, precision: &str) {
 
 /// The default denoising, exact and with the shortcuts, end to end.
 fn end_to_end(name: &str, mesh: &Mesh, gt: &Mesh) {
-    let variants: [(&str, Value); 5] = [
+    let variants: [(&str, Value); 6] = [
         (
-            "defaults (int8, freeze_deg=0.5, flat_skip_deg=15)",
+            "defaults (int8 blocks and stem, freeze_deg=0.5, flat_skip_deg=15, reuse_move=0.1)",
             json!({}),
         ),
+        ("reuse_move=0", json!({"reuse_move": 0.0})),
+        ("int8_stem=false", json!({"int8_stem": false})),
         (
-            "int8, freeze_deg=0.5, flat_skip_deg=0",
-            json!({"flat_skip_deg": 0.0}),
+            "int8 blocks, f32 stem, no reuse (the defaults before issue 12's third round)",
+            json!({"int8_stem": false, "reuse_move": 0.0}),
         ),
         (
-            "int8, freeze_deg=0, flat_skip_deg=0",
-            json!({"freeze_deg": 0.0, "flat_skip_deg": 0.0}),
+            "int8 blocks, f32 stem, freeze_deg=0, flat_skip_deg=0, reuse_move=0",
+            json!({"int8_stem": false, "freeze_deg": 0.0, "flat_skip_deg": 0.0, "reuse_move": 0.0}),
         ),
         (
-            "f32, freeze_deg=0.5, flat_skip_deg=15",
-            json!({"int8": false}),
-        ),
-        (
-            "f32, freeze_deg=0, flat_skip_deg=0 (the exact pipeline)",
-            json!({"int8": false, "freeze_deg": 0.0, "flat_skip_deg": 0.0}),
+            "f32, freeze_deg=0, flat_skip_deg=0, reuse_move=0 (the exact pipeline)",
+            json!({"int8": false, "freeze_deg": 0.0, "flat_skip_deg": 0.0, "reuse_move": 0.0}),
         ),
     ];
     for (label, params) in variants {

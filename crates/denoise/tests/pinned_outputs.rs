@@ -119,6 +119,7 @@ fn outputs_are_those_of_the_program_before_the_move() {
     exact.insert("switch".into(), false.into());
     exact.insert("freeze_deg".into(), 0.0.into());
     exact.insert("flat_skip_deg".into(), 0.0.into());
+    exact.insert("reuse_move".into(), 0.0.into());
     exact.insert("int8".into(), false.into());
     let out = Denoiser::new("normalnet", &exact)
         .unwrap()
