@@ -307,6 +307,17 @@ pub fn blend(
     c: &Candidates,
     features: &[[f64; NUM_FEATURES]],
 ) -> (Vec<Vec3>, usize) {
+    let (blended, stays) = blend_with_stays(weights, c, features);
+    let stay = stays.iter().filter(|&&s| s).count();
+    (blended, stay)
+}
+
+/// [`blend`], with per face whether "stay" had the largest weight.
+pub fn blend_with_stays(
+    weights: &SwitchWeights,
+    c: &Candidates,
+    features: &[[f64; NUM_FEATURES]],
+) -> (Vec<Vec3>, Vec<bool>) {
     let blended: Vec<(Vec3, bool)> = features
         .par_iter()
         .enumerate()
@@ -322,8 +333,7 @@ pub fn blend(
             (if n == [0.0; 3] { c.normals[STAY][f] } else { n }, stays)
         })
         .collect();
-    let stay = blended.iter().filter(|b| b.1).count();
-    (blended.into_iter().map(|b| b.0).collect(), stay)
+    blended.into_iter().unzip()
 }
 
 #[cfg(test)]
