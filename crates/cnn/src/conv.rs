@@ -139,19 +139,20 @@ impl FoldedConv {
         debug_assert_eq!(out.len(), m * m * m * self.cout);
         #[cfg(target_arch = "x86_64")]
         if self.k == 1 && self.pad == 0 && level == Level::Avx512 {
-            let blocks = self.cout / 16;
-            if self.cout.is_multiple_of(16) && matches!(blocks, 1 | 2 | 4) {
-                let args = (self, input, n, out, m, accumulate, relu, region);
-                // SAFETY: `Level::detect` found AVX-512F; 1³, no padding, and
-                // `B · 16` output channels.
-                unsafe {
-                    match blocks {
-                        1 => pointwise_avx512::<1>(args),
-                        2 => pointwise_avx512::<2>(args),
-                        _ => pointwise_avx512::<4>(args),
-                    }
+            // SAFETY: `Level::detect` found AVX-512F; 1³, no padding, and
+            // `B · 16` output channels.
+            let (a, r) = (accumulate, relu);
+            match self.cout {
+                16 => {
+                    return unsafe { pointwise_avx512::<1>(self, input, n, out, m, a, r, region) };
                 }
-                return;
+                32 => {
+                    return unsafe { pointwise_avx512::<2>(self, input, n, out, m, a, r, region) };
+                }
+                64 => {
+                    return unsafe { pointwise_avx512::<4>(self, input, n, out, m, a, r, region) };
+                }
+                _ => {}
             }
         }
         // S independent accumulators per output cube hide the FMA latency:
@@ -270,19 +271,6 @@ fn dense_avx2<const CO: usize, const S: usize>(
     dense::<CO, S, Fused>(c, input, n, out, m, acc, relu, region)
 }
 
-/// What [`FoldedConv::run`] passes on to [`pointwise_avx512`].
-#[cfg(target_arch = "x86_64")]
-type PointwiseArgs<'a> = (
-    &'a FoldedConv,
-    &'a [f32],
-    usize,
-    &'a mut [f32],
-    usize,
-    bool,
-    bool,
-    Option<Region<'a>>,
-);
-
 /// A 1³ convolution (the residual blocks' projection shortcuts): per output
 /// cube one input cube, `cin` broadcasts times `cout / 16` FMAs into
 /// registers. Results equal [`dense`]'s up to f32 rounding (another
@@ -293,8 +281,16 @@ type PointwiseArgs<'a> = (
 /// of 16 (at most 256).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
 unsafe fn pointwise_avx512<const B: usize>(
-    (c, input, n, out, m, accumulate, relu, region): PointwiseArgs,
+    c: &FoldedConv,
+    input: &[f32],
+    n: usize,
+    out: &mut [f32],
+    m: usize,
+    accumulate: bool,
+    relu: bool,
+    region: Option<Region>,
 ) {
     use std::arch::x86_64::*;
     let (cin, co, s) = (c.cin, c.cout, c.stride);

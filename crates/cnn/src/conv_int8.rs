@@ -256,6 +256,12 @@ fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
         }
     };
     let computed = |o: usize| region.is_none_or(|r| r.mask[o]);
+    // a cube outside the region takes the background's value, if any
+    let background = |o: usize, out: &mut [f32]| {
+        if let Some(bg) = region.and_then(|r| r.background) {
+            out[o * co..o * co + co].copy_from_slice(&bg[o * co..o * co + co]);
+        }
+    };
     for od in 0..m {
         let rd = taps(od, s, p, k, n);
         for oh in 0..m {
@@ -265,9 +271,7 @@ fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
                 let rw = taps(ow, s, p, k, n);
                 let o = (od * m + oh) * m + ow;
                 if !computed(o) {
-                    if let Some(bg) = region.and_then(|r| r.background) {
-                        out[o * co..o * co + co].copy_from_slice(&bg[o * co..o * co + co]);
-                    }
+                    background(o, out);
                     ow += 1;
                     continue;
                 }
@@ -302,8 +306,8 @@ fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
                         let at = (o + t) * co;
                         if computed(o + t) {
                             finish(std::array::from_fn(|_| sum), &mut out[at..at + co]);
-                        } else if let Some(bg) = region.and_then(|r| r.background) {
-                            out[at..at + co].copy_from_slice(&bg[at..at + co]);
+                        } else {
+                            background(o + t, out);
                         }
                     }
                     ow += TILE;

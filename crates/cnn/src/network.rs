@@ -247,7 +247,6 @@ impl Cnn {
             }
             hidden.push(FoldedLinear::new(l, Some(bn)));
             width = l.out_features;
-            largest = largest.max(width);
         }
         weights.output.check("output")?;
         if weights.output.in_features != width {

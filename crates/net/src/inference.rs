@@ -344,7 +344,11 @@ pub fn denoise(
     // that length at the start of every iteration, and per face the network
     // output it last got (network, iteration, normal)
     // (allocated only when it is on: 48 MB per million faces)
-    let reuse_limit = params.reuse_move * mean_edge_length(mesh, &topology);
+    let reuse_limit = if params.reuse_move > 0.0 {
+        params.reuse_move * mean_edge_length(mesh, &topology)
+    } else {
+        0.0
+    };
     let reuse_len = |len: usize| if reuse_limit > 0.0 { len } else { 0 };
     let mut path = vec![0.0f64; reuse_len(mesh.num_vertices())];
     let mut path_at: Vec<Vec<f64>> = Vec::new();
@@ -364,7 +368,8 @@ pub fn denoise(
             path_at.push(path.clone());
         }
         let reused = |f: usize| -> Option<Vec3> {
-            let (network, at, normal) = last_output[f]?;
+            // (`last_output` is empty when reuse is off)
+            let (network, at, normal) = last_output.get(f).copied().flatten()?;
             let unmoved = network == i
                 && topology.face_neighbours.row(f).iter().all(|&g| {
                     mesh.faces[g as usize]
@@ -379,7 +384,7 @@ pub fn denoise(
             if frozen[f] || flat[f] {
                 continue;
             }
-            match (reuse_limit > 0.0).then(|| reused(f)).flatten() {
+            match reused(f) {
                 Some(normal) => {
                     normals[f] = normal;
                     reused_now[f] = true;
@@ -440,14 +445,10 @@ pub fn denoise(
             let (blended, stays) = switch::blend_with_stays(weights, &candidates, &features);
             // a reused output is no new evidence that its face has settled:
             // the share is taken over the other faces
-            let (stay, counted) = stays
-                .iter()
-                .enumerate()
-                .filter(|&(f, _)| !reused_now.get(f).copied().unwrap_or(false))
-                .fold((0usize, 0usize), |(s, c), (_, &st)| {
-                    (s + usize::from(st), c + 1)
-                });
-            stay_share = stay as f64 / counted.max(1) as f64;
+            let counted = |f: usize| !reused_now.get(f).copied().unwrap_or(false);
+            let stay = (0..n).filter(|&f| stays[f] && counted(f)).count();
+            let total = (0..n).filter(|&f| counted(f)).count();
+            stay_share = stay as f64 / total.max(1) as f64;
             blended
         } else if params.guided_from > 0 && k >= params.guided_from {
             let guided = gt_guided_normals(
