@@ -456,9 +456,12 @@ unsafe fn tap_products_pair<const V: usize, const S: usize>(
             }
             g += sets;
         }
+        // fewer groups than sets left: still one set each
+        let mut u = 0;
         while g < groups {
-            group(g, 0);
+            group(g, u);
             g += 1;
+            u += 1;
         }
     }
 }
@@ -495,13 +498,18 @@ unsafe fn tap_products<const V: usize, const S: usize>(
             }
             g += S;
         }
+        // the remaining groups on separate sets too (fewer groups than
+        // sets, as 16 input channels with 8 sets, would otherwise chain
+        // every product of the cube on one accumulator)
+        let mut u = 0;
         while g < groups {
             let xv = _mm512_set1_epi32(x.add(4 * g).cast::<i32>().read_unaligned());
             let wg = w.add(g * co * 4);
-            for (v, a) in accs[0].iter_mut().enumerate() {
+            for (v, a) in accs[u].iter_mut().enumerate() {
                 *a = _mm512_dpbusd_epi32(*a, xv, _mm512_loadu_si512(wg.add(64 * v).cast()));
             }
             g += 1;
+            u += 1;
         }
     }
 }

@@ -34,6 +34,8 @@ const EMPTY: u32 = u32::MAX;
 pub(crate) struct Rows {
     /// per input row `d·n + h`: its slot in `values`, or [`EMPTY`]
     slot: Vec<u32>,
+    /// per input depth `d`: bit `h` set where row `d·n + h` is not empty
+    heights: Vec<u64>,
     /// per non-empty row: `len` cubes × 3 channels, cube `w` at `w + pad`
     values: Vec<f32>,
     /// per non-empty row: bit `ow` set where output cube `ow` of an output
@@ -54,11 +56,14 @@ impl Rows {
         debug_assert!(n + pad <= self.len);
         self.slot.clear();
         self.slot.resize(n * n, EMPTY);
+        self.heights.clear();
+        self.heights.resize(n, 0);
         let mut used = 0u32;
         for &i in &occupied.index {
             let row = i as usize / n;
             if self.slot[row] == EMPTY {
                 self.slot[row] = used;
+                self.heights[row / n] |= 1 << (row % n);
                 used += 1;
             }
         }
@@ -196,21 +201,21 @@ fn reaching_rows(
 ) -> u64 {
     reach.clear();
     let mut reached = 0u64;
-    // input depth id = od + kd − p, height ih = oh + kh − p
+    // input depth id = od + kd − p, height ih = oh + kh − p: bit kh of
+    // `heights[id] << p >> oh` (p < K and n + p < 64: no bit lost)
     for kd in 0..K {
         let Some(id) = (od + kd).checked_sub(p).filter(|&i| i < n) else {
             continue;
         };
-        for kh in 0..K {
-            let Some(ih) = (oh + kh).checked_sub(p).filter(|&i| i < n) else {
-                continue;
-            };
-            let slot = rows.slot[id * n + ih];
-            if slot != EMPTY {
-                let outputs = rows.reaches[slot as usize];
-                reached |= outputs;
-                reach.push((slot as usize * rows.len, kd * K + kh, outputs));
-            }
+        let mut taps = (rows.heights[id] << p >> oh) & ((1 << K) - 1);
+        while taps != 0 {
+            let kh = taps.trailing_zeros() as usize;
+            taps &= taps - 1;
+            let slot = rows.slot[id * n + oh + kh - p];
+            debug_assert_ne!(slot, EMPTY);
+            let outputs = rows.reaches[slot as usize];
+            reached |= outputs;
+            reach.push((slot as usize * rows.len, kd * K + kh, outputs));
         }
     }
     reached
