@@ -63,8 +63,9 @@ impl Int8Conv {
         })
     }
 
-    /// As [`FoldedConv::run`] on an input quantized by [`quantize`]
-    /// (`input` bytes, f32 value = byte · `input_scale`).
+    /// As [`FoldedConv::run`] on an input quantized by [`quantize`] with
+    /// this convolution's padding (`input` bytes, f32 value = byte ·
+    /// `input_scale`).
     ///
     /// # Safety
     /// The CPU must have AVX-512 F, BW and VNNI.
@@ -80,35 +81,40 @@ impl Int8Conv {
         relu: bool,
         region: Option<Region>,
     ) {
-        debug_assert_eq!(input.len(), n * n * n * self.cin);
-        // V vectors of 16 output channels, S accumulator sets: eight i32
-        // chains in flight whatever the channel count
+        assert_eq!(input.len(), n * n * (n + 2 * self.pad) * self.cin);
+        // V vectors of 16 output channels; tiles of 1 ..= 16 / V cubes
+        // (at most 12): as many i32 chains in flight, within the 32 registers
         macro_rules! go {
-            ($v:literal, $s:literal, $paired:literal) => {
-                dense_vnni::<$v, $s, $paired>(
+            ($v:literal; $($t:literal)*) => {
+                dense_vnni::<$v>(
                     self,
                     input,
                     input_scale,
                     n,
                     out,
-                    accumulate,
-                    relu,
+                    [accumulate, relu],
                     region,
+                    &[$(tile_sums::<$v, $t> as TileFn<$v>),*],
                 )
             };
         }
         // SAFETY: the caller checked the features.
         unsafe {
             match self.cout {
-                // pairs of output cubes where a weight load feeds few instructions
-                16 => go!(1, 8, true),
-                32 => go!(2, 4, true),
-                64 => go!(4, 2, true),
-                128 => go!(8, 1, false),
-                256 => go!(16, 1, false),
+                16 => go!(1; 1 2 3 4 5 6 7 8 9 10 11 12),
+                32 => go!(2; 1 2 3 4 5 6 7 8),
+                64 => go!(4; 1 2 3 4),
+                128 => go!(8; 1 2),
+                256 => go!(16; 1),
                 c => unreachable!("{c} output channels rejected by Int8Conv::new"),
             }
         }
+    }
+
+    /// Zero cubes on each side of the input's W rows that [`Self::run`]
+    /// expects (its padding).
+    pub(crate) fn pad(&self) -> usize {
+        self.pad
     }
 }
 
@@ -141,49 +147,84 @@ pub(crate) fn supported() -> bool {
     }
 }
 
-/// `x` (all ≥ 0, as after a ReLU) as bytes: byte = ⌊x / s + ½⌋ with
-/// s = max(x) / 255. Returns the bytes (the first `x.len()` of `buffer`,
-/// which only grows: no zero fill per call) and s (1 for an all-zero input).
-/// AVX-512 where the CPU has it (the same bytes as the scalar loop).
-pub(crate) fn quantize<'a>(x: &[f32], buffer: &'a mut Vec<u8>) -> (&'a [u8], f32) {
-    if buffer.len() < x.len() {
-        buffer.resize(x.len(), 0);
+/// `x` (`[n, n, n, cin]`, all ≥ 0, as after a ReLU) as bytes in the layout
+/// [`Int8Conv::run`] reads: every W row of `n` cubes between `pad` zero
+/// cubes on each side (so that no tap along W is ever out of range).
+/// byte = ⌊x / s + ½⌋ with s = max(x) / 255. Returns the bytes (the first
+/// `n²·(n + 2·pad)·cin` of `buffer`, which only grows: no zero fill per
+/// call) and s (1 for an all-zero input). AVX-512 where the CPU has it (the
+/// same bytes as the scalar loop).
+pub(crate) fn quantize<'a>(
+    x: &[f32],
+    n: usize,
+    pad: usize,
+    buffer: &'a mut Vec<u8>,
+) -> (&'a [u8], f32) {
+    let cin = x.len() / (n * n * n).max(1);
+    assert_eq!(x.len(), n * n * n * cin, "input is not [n, n, n, cin]");
+    let (row, padded) = (n * cin, (n + 2 * pad) * cin);
+    let len = n * n * padded;
+    if buffer.len() < len {
+        buffer.resize(len, 0);
     }
-    let out = &mut buffer[..x.len()];
+    let out = &mut buffer[..len];
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
+    let avx512 = std::arch::is_x86_feature_detected!("avx512f");
+    #[cfg(not(target_arch = "x86_64"))]
+    let avx512 = false;
+    let max = match avx512 {
         // SAFETY: the feature was detected.
-        let scale = unsafe { quantize_avx512(x, out) };
-        return (out, scale);
+        #[cfg(target_arch = "x86_64")]
+        true => unsafe { max_avx512(x) },
+        _ => x.iter().fold(0.0f32, |m, &v| m.max(v)),
+    };
+    let scale = if max > 0.0 { max / 255.0 } else { 1.0 };
+    let inv = 1.0 / scale;
+    for (x, o) in x
+        .chunks_exact(row.max(1))
+        .zip(out.chunks_exact_mut(padded.max(1)))
+    {
+        let (left, rest) = o.split_at_mut(pad * cin);
+        let (middle, right) = rest.split_at_mut(row);
+        left.fill(0);
+        right.fill(0);
+        match avx512 {
+            // SAFETY: the feature was detected.
+            #[cfg(target_arch = "x86_64")]
+            true => unsafe { bytes_avx512(x, inv, middle) },
+            _ => bytes_scalar(x, inv, middle),
+        }
     }
-    let scale = quantize_scalar(x, out);
     (out, scale)
 }
 
-fn quantize_scalar(x: &[f32], out: &mut [u8]) -> f32 {
-    let max = x.iter().fold(0.0f32, |m, &v| m.max(v));
-    let scale = if max > 0.0 { max / 255.0 } else { 1.0 };
-    let inv = 1.0 / scale;
+fn bytes_scalar(x: &[f32], inv: f32, out: &mut [u8]) {
     for (o, &v) in out.iter_mut().zip(x) {
         *o = (v * inv + 0.5).min(255.0) as u8;
     }
-    scale
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn quantize_avx512(x: &[f32], out: &mut [u8]) -> f32 {
+fn max_avx512(x: &[f32]) -> f32 {
     use std::arch::x86_64::*;
     let chunks = x.chunks_exact(16);
     let tail = chunks.remainder();
     let mut m = _mm512_setzero_ps();
-    for c in chunks.clone() {
+    for c in chunks {
         // SAFETY: 16 readable f32.
         m = _mm512_max_ps(m, unsafe { _mm512_loadu_ps(c.as_ptr()) });
     }
-    let max = tail.iter().fold(_mm512_reduce_max_ps(m), |m, &v| m.max(v));
-    let scale = if max > 0.0 { max / 255.0 } else { 1.0 };
-    let inv = 1.0 / scale;
+    tail.iter().fold(_mm512_reduce_max_ps(m), |m, &v| m.max(v))
+}
+
+/// As [`bytes_scalar`] (the same bytes), 16 at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn bytes_avx512(x: &[f32], inv: f32, out: &mut [u8]) {
+    use std::arch::x86_64::*;
+    let chunks = x.chunks_exact(16);
+    let tail = chunks.remainder();
     let (iv, half, top) = (
         _mm512_set1_ps(inv),
         _mm512_set1_ps(0.5),
@@ -203,32 +244,33 @@ fn quantize_avx512(x: &[f32], out: &mut [u8]) -> f32 {
             );
         }
     }
-    for (o, &v) in outs.into_remainder().iter_mut().zip(tail) {
-        *o = (v * inv + 0.5).min(255.0) as u8;
-    }
-    scale
+    bytes_scalar(tail, inv, outs.into_remainder());
 }
+
+/// Computes the i32 sums of `t` neighbouring output cubes of one W row into
+/// `sums[..t]` (the function at index `t − 1` of the table).
+#[cfg(target_arch = "x86_64")]
+type TileFn<const V: usize> =
+    unsafe fn(&Int8Conv, &[u8], usize, [usize; 3], &mut [[std::arch::x86_64::__m512i; V]]);
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
 #[allow(clippy::too_many_arguments)]
-fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
+fn dense_vnni<const V: usize>(
     c: &Int8Conv,
     input: &[u8],
     input_scale: f32,
     n: usize,
     out: &mut [f32],
-    accumulate: bool,
-    relu: bool,
+    [accumulate, relu]: [bool; 2],
     region: Option<Region>,
+    tiles: &[TileFn<V>],
 ) {
     use std::arch::x86_64::*;
-    let (cin, k, s, p) = (c.cin, c.k, c.stride, c.pad);
-    let co = c.cout;
+    let (k, s, p, co) = (c.k, c.stride, c.pad, c.cout);
     debug_assert_eq!(co, 16 * V);
     let m = output_side(n, k, s, p);
-    debug_assert_eq!(out.len(), m * m * m * co);
-    let groups = cin / 4;
+    assert_eq!(out.len(), m * m * m * co);
     let mut factor = [[0.0f32; 16]; V];
     for (v, f) in factor.iter_mut().enumerate() {
         for (j, f) in f.iter_mut().enumerate() {
@@ -236,8 +278,8 @@ fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
         }
     }
     // i32 sums of one output cube → f32 scale, bias, [residual], [ReLU]
-    let finish = |sums: [__m512i; V], dst: &mut [f32]| {
-        for (v, sum) in sums.into_iter().enumerate() {
+    let finish = |sums: &[__m512i; V], dst: &mut [f32]| {
+        for (v, &sum) in sums.iter().enumerate() {
             let f: &[f32; 16] = &factor[v];
             let b: &[f32; 16] = c.bias[16 * v..16 * v + 16].try_into().expect("bias");
             // SAFETY: 16 readable f32 each; unaligned loads.
@@ -262,256 +304,99 @@ fn dense_vnni<const V: usize, const S: usize, const PAIRED: bool>(
             out[o * co..o * co + co].copy_from_slice(&bg[o * co..o * co + co]);
         }
     };
+    let mut sums = [[_mm512_setzero_si512(); V]; 12];
+    assert!((1..=sums.len()).contains(&tiles.len()));
     for od in 0..m {
-        let rd = taps(od, s, p, k, n);
         for oh in 0..m {
-            let rh = taps(oh, s, p, k, n);
-            let mut ow = 0;
-            while ow < m {
-                let rw = taps(ow, s, p, k, n);
-                let o = (od * m + oh) * m + ow;
-                if !computed(o) {
-                    background(o, out);
-                    ow += 1;
-                    continue;
-                }
-                // 16 output channels: eight neighbours along W with every
-                // tap in range share each weight load (exact sums: the same
-                // bits as one by one); cubes outside the region are computed
-                // and then replaced by the background
-                if V == 1
-                    && ow + TILE <= m
-                    && rw == (0..k)
-                    && taps(ow + TILE - 1, s, p, k, n) == rw
-                    && (o..o + TILE).any(computed)
-                {
-                    let mut sums = [_mm512_setzero_si512(); TILE];
-                    for kd in rd.clone() {
-                        let id = od * s + kd - p;
-                        for kh in rh.clone() {
-                            let ih = oh * s + kh - p;
-                            let i = (id * n + ih) * n + ow * s - p;
-                            let first = (kd * k + kh) * k;
-                            let x = &input[i * cin..(i + (TILE - 1) * s + k) * cin];
-                            let wt = &c.w[first * cin * co..(first + k) * cin * co];
-                            // SAFETY: `x` holds the k taps of the TILE cubes
-                            // (`s · cin` apart) and `wt` the k taps' weights
-                            // (sliced above); the CPU has VNNI (caller).
-                            unsafe {
-                                tile_row_products(&mut sums, x.as_ptr(), wt.as_ptr(), groups, k, s)
-                            };
-                        }
+            let first = (od * m + oh) * m;
+            // the row's computed cubes lie in lo..hi: those in tiles (a
+            // cube between them not in the region is computed, then
+            // replaced by the background), the rest background
+            let Some(lo) = (0..m).find(|&w| computed(first + w)) else {
+                (first..first + m).for_each(|o| background(o, out));
+                continue;
+            };
+            let hi = (lo..m).rfind(|&w| computed(first + w)).map_or(m, |w| w + 1);
+            (first..first + lo).for_each(|o| background(o, out));
+            (first + hi..first + m).for_each(|o| background(o, out));
+            let mut ow = lo;
+            while ow < hi {
+                // equal tiles, as long as the table allows
+                let parts = (hi - ow).div_ceil(tiles.len());
+                let t = (hi - ow).div_ceil(parts);
+                // SAFETY: the caller checked the features; `tile_sums`
+                // checks its slices.
+                unsafe { tiles[t - 1](c, input, n, [od, oh, ow], &mut sums) };
+                for (i, sum) in sums[..t].iter().enumerate() {
+                    let o = first + ow + i;
+                    if computed(o) {
+                        finish(sum, &mut out[o * co..o * co + co]);
+                    } else {
+                        background(o, out);
                     }
-                    for (t, sum) in sums.into_iter().enumerate() {
-                        let at = (o + t) * co;
-                        if computed(o + t) {
-                            finish(std::array::from_fn(|_| sum), &mut out[at..at + co]);
-                        } else {
-                            background(o + t, out);
-                        }
-                    }
-                    ow += TILE;
-                    continue;
                 }
-                // two neighbours along W with the same taps share each
-                // weight load (the sums are exact: the same bits either way)
-                let pair =
-                    PAIRED && ow + 1 < m && computed(o + 1) && taps(ow + 1, s, p, k, n) == rw;
-                let mut accs = [[[_mm512_setzero_si512(); V]; S]; 2];
-                for kd in rd.clone() {
-                    let id = od * s + kd - p;
-                    for kh in rh.clone() {
-                        let ih = oh * s + kh - p;
-                        for kw in rw.clone() {
-                            let iw = ow * s + kw - p;
-                            let i = (id * n + ih) * n + iw;
-                            let tap = (kd * k + kh) * k + kw;
-                            let wt = &c.w[tap * cin * co..(tap + 1) * cin * co];
-                            if pair {
-                                let x = &input[i * cin..(i + s) * cin + cin];
-                                let [a0, a1] = &mut accs;
-                                // SAFETY: `x` holds the `4 · groups` bytes of
-                                // both cubes (`s · cin` apart) and `wt`
-                                // `groups · co · 4`; offsets stay inside.
-                                unsafe {
-                                    tap_products_pair::<V, S>(
-                                        a0,
-                                        a1,
-                                        x.as_ptr(),
-                                        x.as_ptr().add(s * cin),
-                                        wt.as_ptr(),
-                                        groups,
-                                        co,
-                                    )
-                                };
-                            } else {
-                                let x = &input[i * cin..i * cin + cin];
-                                // SAFETY: `x` holds `4 · groups` bytes and `wt`
-                                // `groups · co · 4` (checked by the slicing
-                                // above); every offset below stays inside them.
-                                unsafe {
-                                    tap_products::<V, S>(
-                                        &mut accs[0],
-                                        x.as_ptr(),
-                                        wt.as_ptr(),
-                                        groups,
-                                        co,
-                                    )
-                                };
+                ow += t;
+            }
+        }
+    }
+}
+
+/// The i32 sums of the `T` output cubes `ow .. ow + T` of output row (`od`,
+/// `oh`) into `sums[..T]`, `V` vectors of 16 channels each: for every tap
+/// and input group, `V` weight loads feed `T · V` `vpdpbusd` (one input
+/// broadcast per cube), `T · V` chains in flight. The input's W rows are
+/// padded ([`quantize`]), so every W tap is in range; D and H taps out of
+/// range are skipped.
+///
+/// # Safety
+/// The CPU has AVX-512 F, BW and VNNI.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
+unsafe fn tile_sums<const V: usize, const T: usize>(
+    c: &Int8Conv,
+    input: &[u8],
+    n: usize,
+    [od, oh, ow]: [usize; 3],
+    sums: &mut [[std::arch::x86_64::__m512i; V]],
+) {
+    use std::arch::x86_64::*;
+    let (k, s, p, cin, co) = (c.k, c.stride, c.pad, c.cin, c.cout);
+    let groups = cin / 4;
+    let padded = (n + 2 * p) * cin;
+    let mut acc = [[_mm512_setzero_si512(); V]; T];
+    for kd in taps(od, s, p, k, n) {
+        let id = od * s + kd - p;
+        for kh in taps(oh, s, p, k, n) {
+            let ih = oh * s + kh - p;
+            // padded W position of output cube ow's tap kw: ow·s + kw
+            let start = (id * n + ih) * padded + ow * s * cin;
+            let x = &input[start..start + ((T - 1) * s + k) * cin];
+            let first = (kd * k + kh) * k;
+            let wt = &c.w[first * cin * co..(first + k) * cin * co];
+            // SAFETY (all reads): kw < k, g < groups, t < T, v < V: input
+            // bytes (t·s + kw)·cin + 4g + 4 ≤ ((T − 1)·s + k)·cin, weight
+            // bytes ((kw·groups + g)·co + 16v)·4 + 64 ≤ k·cin·co.
+            unsafe {
+                for kw in 0..k {
+                    for g in 0..groups {
+                        let wg = wt.as_ptr().add((kw * groups + g) * co * 4);
+                        let wv: [__m512i; V] =
+                            std::array::from_fn(|v| _mm512_loadu_si512(wg.add(64 * v).cast()));
+                        let xg = x.as_ptr().add(kw * cin + 4 * g);
+                        for (t, a) in acc.iter_mut().enumerate() {
+                            let xv = _mm512_set1_epi32(
+                                xg.add(t * s * cin).cast::<i32>().read_unaligned(),
+                            );
+                            for (a, &w) in a.iter_mut().zip(&wv) {
+                                *a = _mm512_dpbusd_epi32(*a, xv, w);
                             }
                         }
                     }
                 }
-                for (cube, sets) in accs.iter().enumerate().take(1 + usize::from(pair)) {
-                    let sums = std::array::from_fn(|v| {
-                        sets[1..]
-                            .iter()
-                            .fold(sets[0][v], |sum, acc| _mm512_add_epi32(sum, acc[v]))
-                    });
-                    let at = (o + cube) * co;
-                    finish(sums, &mut out[at..at + co]);
-                }
-                ow += 1 + usize::from(pair);
             }
         }
     }
-}
-
-/// Output cubes per W tile of [`tile_row_products`].
-const TILE: usize = 8;
-
-/// One (kd, kh) row of taps for [`TILE`] neighbouring output cubes with 16
-/// output channels: for each of the `k` W taps and input group, one weight
-/// load feeds [`TILE`] `vpdpbusd` (one per cube), [`TILE`] chains in flight.
-///
-/// # Safety
-/// `x` points to the input bytes of cubes `0 .. (TILE − 1)·s + k` (`4 ·
-/// groups` each, consecutive), `w` to `k · groups · 16 · 4` weight bytes;
-/// the CPU has AVX-512 F and VNNI.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
-#[inline]
-unsafe fn tile_row_products(
-    sums: &mut [std::arch::x86_64::__m512i; TILE],
-    x: *const u8,
-    w: *const i8,
-    groups: usize,
-    k: usize,
-    s: usize,
-) {
-    use std::arch::x86_64::*;
-    let cin = 4 * groups;
-    // SAFETY (all reads): kw < k and g < groups; cube t·s + kw ≤ (TILE −
-    // 1)·s + k − 1, inside `x`; weights (kw·groups + g)·64 + 64 ≤ k·groups·64.
-    unsafe {
-        for kw in 0..k {
-            for g in 0..groups {
-                let wv = _mm512_loadu_si512(w.add((kw * groups + g) * 64).cast());
-                for (t, sum) in sums.iter_mut().enumerate() {
-                    let at = (t * s + kw) * cin + 4 * g;
-                    let xv = _mm512_set1_epi32(x.add(at).cast::<i32>().read_unaligned());
-                    *sum = _mm512_dpbusd_epi32(*sum, xv, wv);
-                }
-            }
-        }
-    }
-}
-
-/// As [`tap_products`] for two output cubes at once: each weight vector is
-/// loaded once for both.
-///
-/// # Safety
-/// As [`tap_products`], for `x0` and `x1`.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
-#[inline]
-unsafe fn tap_products_pair<const V: usize, const S: usize>(
-    a0: &mut [[std::arch::x86_64::__m512i; V]; S],
-    a1: &mut [[std::arch::x86_64::__m512i; V]; S],
-    x0: *const u8,
-    x1: *const u8,
-    w: *const i8,
-    groups: usize,
-    co: usize,
-) {
-    use std::arch::x86_64::*;
-    // half the accumulator sets per cube: as many chains in flight as alone
-    let sets = (S / 2).max(1);
-    let mut g = 0;
-    // SAFETY (all reads): g < groups, as in `tap_products`.
-    unsafe {
-        let mut group = |g: usize, u: usize| {
-            let xv0 = _mm512_set1_epi32(x0.add(4 * g).cast::<i32>().read_unaligned());
-            let xv1 = _mm512_set1_epi32(x1.add(4 * g).cast::<i32>().read_unaligned());
-            let wg = w.add(g * co * 4);
-            for v in 0..V {
-                let wv = _mm512_loadu_si512(wg.add(64 * v).cast());
-                a0[u][v] = _mm512_dpbusd_epi32(a0[u][v], xv0, wv);
-                a1[u][v] = _mm512_dpbusd_epi32(a1[u][v], xv1, wv);
-            }
-        };
-        while g + sets <= groups {
-            for u in 0..sets {
-                group(g + u, u);
-            }
-            g += sets;
-        }
-        // fewer groups than sets left: still one set each
-        let mut u = 0;
-        while g < groups {
-            group(g, u);
-            g += 1;
-            u += 1;
-        }
-    }
-}
-
-/// Adds one tap's products to the accumulators: input group `g` (four
-/// channels, one i32 broadcast) times its `V` weight vectors, groups spread
-/// over the `S` accumulator sets.
-///
-/// # Safety
-/// `x` points to `4 · groups` readable bytes, `w` to `groups · co · 4`; the
-/// CPU has AVX-512 F and VNNI.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
-#[inline]
-unsafe fn tap_products<const V: usize, const S: usize>(
-    accs: &mut [[std::arch::x86_64::__m512i; V]; S],
-    x: *const u8,
-    w: *const i8,
-    groups: usize,
-    co: usize,
-) {
-    use std::arch::x86_64::*;
-    let mut g = 0;
-    // SAFETY (all reads): g < groups, so the broadcast reads bytes
-    // 4g..4g+4 of x and the loads bytes (g·co + 16v)·4 .. +64 of w.
-    unsafe {
-        while g + S <= groups {
-            for (u, acc) in accs.iter_mut().enumerate() {
-                let xv = _mm512_set1_epi32(x.add(4 * (g + u)).cast::<i32>().read_unaligned());
-                let wg = w.add((g + u) * co * 4);
-                for (v, a) in acc.iter_mut().enumerate() {
-                    *a = _mm512_dpbusd_epi32(*a, xv, _mm512_loadu_si512(wg.add(64 * v).cast()));
-                }
-            }
-            g += S;
-        }
-        // the remaining groups on separate sets too (fewer groups than
-        // sets, as 16 input channels with 8 sets, would otherwise chain
-        // every product of the cube on one accumulator)
-        let mut u = 0;
-        while g < groups {
-            let xv = _mm512_set1_epi32(x.add(4 * g).cast::<i32>().read_unaligned());
-            let wg = w.add(g * co * 4);
-            for (v, a) in accs[u].iter_mut().enumerate() {
-                *a = _mm512_dpbusd_epi32(*a, xv, _mm512_loadu_si512(wg.add(64 * v).cast()));
-            }
-            g += 1;
-            u += 1;
-        }
-    }
+    sums[..T].copy_from_slice(&acc);
 }
 
 #[cfg(test)]
@@ -576,7 +461,7 @@ mod tests {
                 f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
                 let mut got = start.clone();
                 let mut buffer = Vec::new();
-                let (xq, sx) = quantize(&x, &mut buffer);
+                let (xq, sx) = quantize(&x, n, q.pad(), &mut buffer);
                 // SAFETY: supported() checked the features.
                 unsafe { q.run(xq, sx, n, &mut got, accumulate, relu, None) };
                 let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
@@ -594,8 +479,53 @@ mod tests {
         }
     }
 
+    /// The sums in plain integer arithmetic over the unpadded bytes, then the
+    /// kernel's f32 steps (one fused multiply-add, residual, ReLU).
+    #[allow(clippy::too_many_arguments)]
+    fn reference(
+        q: &Int8Conv,
+        x: &[u8],
+        scale: f32,
+        n: usize,
+        out: &mut [f32],
+        accumulate: bool,
+        region: Region,
+    ) {
+        let (k, s, p, cin, co) = (q.k, q.stride, q.pad, q.cin, q.cout);
+        let m = output_side(n, k, s, p);
+        for o in 0..m * m * m {
+            let at = o * co..o * co + co;
+            if !region.mask[o] {
+                out[at.clone()].copy_from_slice(&region.background.expect("bg")[at]);
+                continue;
+            }
+            let (od, oh, ow) = (o / (m * m), o / m % m, o % m);
+            for c in 0..co {
+                let mut sum = 0i32;
+                for kd in taps(od, s, p, k, n) {
+                    for kh in taps(oh, s, p, k, n) {
+                        for kw in taps(ow, s, p, k, n) {
+                            let (id, ih, iw) = (od * s + kd - p, oh * s + kh - p, ow * s + kw - p);
+                            let tap = (kd * k + kh) * k + kw;
+                            for ci in 0..cin {
+                                let w = q.w[((tap * (cin / 4) + ci / 4) * co + c) * 4 + ci % 4];
+                                let v = x[((id * n + ih) * n + iw) * cin + ci];
+                                sum += i32::from(w) * i32::from(v);
+                            }
+                        }
+                    }
+                }
+                let mut y = (sum as f32).mul_add(scale * q.scale[c], q.bias[c]);
+                if accumulate {
+                    y += out[o * co + c];
+                }
+                out[o * co + c] = y.max(0.0);
+            }
+        }
+    }
+
     #[test]
-    fn pairing_output_cubes_changes_no_bit() {
+    fn the_tiles_give_the_exact_integer_sums() {
         if !supported() {
             eprintln!("no AVX-512 VNNI on this CPU: skipped");
             return;
@@ -605,83 +535,87 @@ mod tests {
             state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
             state >> 8
         };
+        // rows longer than the largest tile (16 → 30 cubes), odd lengths,
+        // every output width the kernel has
         for (cin, cout, stride, n) in [
-            (16, 16, 1, 7),
-            (16, 32, 2, 9),
-            (32, 32, 1, 6),
-            (32, 64, 1, 5),
+            (16, 16, 1, 30),
+            (16, 16, 2, 21),
+            (32, 32, 1, 11),
+            (16, 32, 2, 11),
+            (32, 64, 2, 6),
+            (64, 64, 1, 7),
+            (64, 128, 1, 4),
+            (128, 256, 2, 5),
         ] {
             let q = Int8Conv::new(&conv(cin, cout, stride, cin as u32 + 5)).expect("layout fits");
             let m = output_side(n, 3, stride, 1);
             let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
-            // a mask with runs and gaps, so pairs, singles and skipped cubes mix
-            let mask: Vec<bool> = (0..m * m * m).map(|_| next() % 4 != 0).collect();
+            // the same bytes with zero cubes around every W row
+            let padded: Vec<u8> = x
+                .chunks_exact(n * cin)
+                .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
+                .collect();
+            // a mask with runs and gaps, and rows with nothing to compute
+            let mask: Vec<bool> = (0..m * m * m)
+                .map(|o| o / m % 3 != 1 && next() % 4 != 0)
+                .collect();
             let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
             let region = Region {
                 mask: &mask,
                 background: Some(&background),
             };
-            let start: Vec<f32> = (0..m * m * m * cout).map(|i| (i % 5) as f32).collect();
-            for (accumulate, relu) in [(false, true), (true, false)] {
-                let run = |paired: bool| {
-                    let mut out = start.clone();
-                    macro_rules! go {
-                        ($v:literal, $s:literal, $p:literal) => {
-                            // SAFETY: supported() checked the features.
-                            unsafe {
-                                dense_vnni::<$v, $s, $p>(
-                                    &q,
-                                    &x,
-                                    0.01,
-                                    n,
-                                    &mut out,
-                                    accumulate,
-                                    relu,
-                                    Some(region),
-                                )
-                            }
-                        };
-                    }
-                    match (cout, paired) {
-                        (16, true) => go!(1, 8, true),
-                        (16, false) => go!(1, 8, false),
-                        (32, true) => go!(2, 4, true),
-                        (32, false) => go!(2, 4, false),
-                        (64, true) => go!(4, 2, true),
-                        _ => go!(4, 2, false),
-                    }
-                    out
-                };
-                let (paired, single) = (run(true), run(false));
+            let start: Vec<f32> = (0..m * m * m * cout)
+                .map(|i| (i % 5) as f32 - 2.0)
+                .collect();
+            for accumulate in [false, true] {
+                let mut want = start.clone();
+                reference(&q, &x, 0.01, n, &mut want, accumulate, region);
+                let mut got = start.clone();
+                // SAFETY: supported() checked the features.
+                unsafe { q.run(&padded, 0.01, n, &mut got, accumulate, true, Some(region)) };
                 assert!(
-                    paired
-                        .iter()
-                        .zip(&single)
+                    want.iter()
+                        .zip(&got)
                         .all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "cin {cin} cout {cout} stride {stride}"
+                    "cin {cin} cout {cout} stride {stride} n {n}"
                 );
             }
         }
     }
 
     #[test]
-    fn quantize_maps_zero_to_zero_the_maximum_to_255_and_rounds() {
-        let x = [0.0, 1.0, 0.5, 2.0, 0.013, 1.999];
+    fn quantize_maps_zero_to_zero_the_maximum_to_255_rounds_and_pads_rows() {
+        // n = 1, one channel: a row of one cube between two zero cubes
+        let x = [0.013];
         let mut buffer = Vec::new();
-        let (q, s) = quantize(&x, &mut buffer);
+        let (q, s) = quantize(&x, 1, 1, &mut buffer);
+        assert_eq!((q, s), (&[0, 255, 0][..], 0.013 / 255.0));
+        // n = 2, three channels, rows padded by one cube
+        let x: Vec<f32> = [0.0, 1.0, 0.5, 2.0, 0.013, 1.999]
+            .into_iter()
+            .cycle()
+            .take(24)
+            .collect();
+        let (q, s) = quantize(&x, 2, 1, &mut buffer);
         assert!((s - 2.0 / 255.0).abs() < 1e-9);
-        assert_eq!((q[0], q[3]), (0, 255));
-        for (&v, &b) in x.iter().zip(q) {
-            assert!((b as f32 * s - v).abs() <= 0.5001 * s, "{v} -> {b}");
+        assert_eq!(q.len(), 4 * 4 * 3);
+        for (row, bytes) in x.chunks_exact(6).zip(q.chunks_exact(12)) {
+            assert_eq!((&bytes[..3], &bytes[9..]), (&[0; 3][..], &[0; 3][..]));
+            for (&v, &b) in row.iter().zip(&bytes[3..9]) {
+                assert!((b as f32 * s - v).abs() <= 0.5001 * s, "{v} -> {b}");
+            }
         }
-        // a shorter input reuses the buffer: only its own bytes count
-        assert_eq!(quantize(&[0.0; 4], &mut buffer), (&[0u8; 4][..], 1.0));
+        assert_eq!((q[3], q[6]), (0, 255));
+        // a smaller input reuses the buffer: only its own bytes count
+        assert_eq!(quantize(&[0.0; 8], 2, 0, &mut buffer), (&[0u8; 8][..], 1.0));
         // the vector path (where the CPU has it) gives the scalar loop's bytes
         let long: Vec<f32> = (0..1000)
             .map(|i| ((i * 7919) % 1013) as f32 * 0.037)
             .collect();
+        let max = long.iter().fold(0.0f32, |m, &v| m.max(v));
         let mut scalar = vec![0; long.len()];
-        let s_scalar = quantize_scalar(&long, &mut scalar);
-        assert_eq!(quantize(&long, &mut buffer), (&scalar[..], s_scalar));
+        bytes_scalar(&long, 1.0 / (max / 255.0), &mut scalar);
+        let (q, s) = quantize(&long, 10, 0, &mut buffer);
+        assert_eq!((q, s), (&scalar[..], max / 255.0));
     }
 }

@@ -513,12 +513,12 @@ impl Cnn {
                 match &b.int8 {
                     #[cfg(target_arch = "x86_64")]
                     Some((qa, qb)) if self.int8 => {
-                        let (xq, sx) = conv_int8::quantize(x, &mut s.quantized);
+                        let (xq, sx) = conv_int8::quantize(x, n, qa.pad(), &mut s.quantized);
                         // SAFETY: `set_precision` enables int8 only where
                         // `conv_int8::supported()`.
                         unsafe { qa.run(xq, sx, n, t, false, true, region_a) };
                         lap(3 + 3 * bi, &mut profile);
-                        let (tq, st) = conv_int8::quantize(t, &mut s.quantized);
+                        let (tq, st) = conv_int8::quantize(t, m, qb.pad(), &mut s.quantized);
                         // SAFETY: as above.
                         unsafe { qb.run(tq, st, m, y, true, true, region_b) };
                     }
