@@ -197,10 +197,7 @@ impl FoldedConv {
         if n <= 64 {
             // W rows as bit sets: an output row ORs the ≤ k² input rows of
             // its (d, h) window, then each output cube tests its W window
-            let rows: Vec<u64> = mask_in
-                .chunks_exact(n)
-                .map(|r| r.iter().rev().fold(0, |bits, &f| bits << 1 | u64::from(f)))
-                .collect();
+            let rows: Vec<u64> = mask_in.chunks_exact(n).map(bits_of).collect();
             let windows: Vec<u64> = (0..m)
                 .map(|ow| taps(ow, s, p, k, n).fold(0, |bits, kw| bits | 1 << (ow * s + kw - p)))
                 .collect();
@@ -353,6 +350,25 @@ pub(crate) fn output_side(n: usize, k: usize, s: usize, p: usize) -> usize {
     (n + 2 * p).saturating_sub(k) / s + 1
 }
 
+/// The flags of `row` (at most 64) as bits: bit i set where `row[i]`;
+/// eight flags at a time (their bytes, 0 or 1, gathered by one multiply).
+#[inline]
+pub(crate) fn bits_of(row: &[bool]) -> u64 {
+    debug_assert!(row.len() <= 64);
+    let chunks = row.chunks_exact(8);
+    let tail = chunks.remainder();
+    let mut bits = 0u64;
+    for (i, c) in chunks.enumerate() {
+        let bytes = u64::from_le_bytes(std::array::from_fn(|j| u8::from(c[j])));
+        // byte j (0 or 1) lands on bit 56 + j
+        bits |= (bytes.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * i);
+    }
+    let at = row.len() - tail.len();
+    tail.iter()
+        .enumerate()
+        .fold(bits, |bits, (j, &f)| bits | u64::from(f) << (at + j))
+}
+
 /// Valid kernel offsets along one axis for output coordinate `o`:
 /// `kk` with `0 <= o·s + kk − p < n`.
 #[inline(always)]
@@ -454,7 +470,7 @@ fn dense<const CO: usize, const S: usize, F: MulAdd>(
 
 #[cfg(test)]
 mod tests {
-    use super::taps;
+    use super::{bits_of, taps};
 
     #[test]
     fn taps_clip_at_borders() {
@@ -466,5 +482,24 @@ mod tests {
         assert_eq!(taps(10, 2, 1, 3, 21), 0..2);
         // 1³ stride 2, no padding
         assert_eq!(taps(10, 2, 0, 1, 21), 0..1);
+    }
+
+    #[test]
+    fn bits_of_sets_bit_i_for_flag_i() {
+        let mut state = 9u32;
+        for len in [0, 1, 7, 8, 9, 21, 63, 64] {
+            let row: Vec<bool> = (0..len)
+                .map(|_| {
+                    state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    state >> 20 & 1 == 1
+                })
+                .collect();
+            let want = row
+                .iter()
+                .enumerate()
+                .fold(0u64, |b, (i, &f)| b | u64::from(f) << i);
+            assert_eq!(bits_of(&row), want, "{row:?}");
+        }
+        assert_eq!(bits_of(&[true; 64]), u64::MAX);
     }
 }

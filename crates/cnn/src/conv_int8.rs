@@ -116,6 +116,27 @@ impl Int8Conv {
     pub(crate) fn pad(&self) -> usize {
         self.pad
     }
+
+    /// The input W rows (`d·n + h` of an `n³` input) that [`Self::run`]
+    /// reads when it computes the output cubes set in `mask`: the rows in
+    /// the (d, h) window of every output row with a cube to compute.
+    pub(crate) fn rows_read(&self, mask: &[bool], n: usize, rows: &mut Vec<bool>) {
+        let (k, s, p) = (self.k, self.stride, self.pad);
+        let m = output_side(n, k, s, p);
+        assert_eq!(mask.len(), m * m * m);
+        rows.clear();
+        rows.resize(n * n, false);
+        for (o, row) in mask.chunks_exact(m).enumerate() {
+            if row.contains(&true) {
+                let (od, oh) = (o / m, o % m);
+                for kd in taps(od, s, p, k, n) {
+                    for kh in taps(oh, s, p, k, n) {
+                        rows[(od * s + kd - p) * n + oh * s + kh - p] = true;
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Per output channel of `c`, the scale of its signed-byte weights: its
@@ -152,12 +173,15 @@ pub(crate) fn supported() -> bool {
 /// cubes on each side (so that no tap along W is ever out of range).
 /// byte = ⌊x / s + ½⌋ with s = max(x) / 255. Returns the bytes (the first
 /// `n²·(n + 2·pad)·cin` of `buffer`, which only grows: no zero fill per
-/// call) and s (1 for an all-zero input). AVX-512 where the CPU has it (the
-/// same bytes as the scalar loop).
+/// call) and s (1 for an all-zero input). With `rows` (one flag per W row,
+/// as [`Int8Conv::rows_read`] gives), only the flagged rows are written (the
+/// others keep what the buffer held); s is the whole input's either way.
+/// AVX-512 where the CPU has it (the same bytes as the scalar loop).
 pub(crate) fn quantize<'a>(
     x: &[f32],
     n: usize,
     pad: usize,
+    rows: Option<&[bool]>,
     buffer: &'a mut Vec<u8>,
 ) -> (&'a [u8], f32) {
     let cin = x.len() / (n * n * n).max(1);
@@ -180,9 +204,12 @@ pub(crate) fn quantize<'a>(
     };
     let scale = if max > 0.0 { max / 255.0 } else { 1.0 };
     let inv = 1.0 / scale;
-    for (x, o) in x
+    let wanted = |r: usize| rows.is_none_or(|rows| rows[r]);
+    for (_, (x, o)) in x
         .chunks_exact(row.max(1))
         .zip(out.chunks_exact_mut(padded.max(1)))
+        .enumerate()
+        .filter(|&(r, _)| wanted(r))
     {
         let (left, rest) = o.split_at_mut(pad * cin);
         let (middle, right) = rest.split_at_mut(row);
@@ -461,7 +488,7 @@ mod tests {
                 f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
                 let mut got = start.clone();
                 let mut buffer = Vec::new();
-                let (xq, sx) = quantize(&x, n, q.pad(), &mut buffer);
+                let (xq, sx) = quantize(&x, n, q.pad(), None, &mut buffer);
                 // SAFETY: supported() checked the features.
                 unsafe { q.run(xq, sx, n, &mut got, accumulate, relu, None) };
                 let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
@@ -555,9 +582,10 @@ mod tests {
                 .chunks_exact(n * cin)
                 .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
                 .collect();
-            // a mask with runs and gaps, and rows with nothing to compute
+            // a mask with runs and gaps, rows with nothing to compute, and
+            // a back half in D the kernel need not read
             let mask: Vec<bool> = (0..m * m * m)
-                .map(|o| o / m % 3 != 1 && next() % 4 != 0)
+                .map(|o| o / (m * m) < m / 2 && o / m % 3 != 1 && next() % 4 != 0)
                 .collect();
             let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
             let region = Region {
@@ -579,6 +607,36 @@ mod tests {
                         .all(|(a, b)| a.to_bits() == b.to_bits()),
                     "cin {cin} cout {cout} stride {stride} n {n}"
                 );
+                // rows it does not read may hold anything
+                let mut rows = Vec::new();
+                q.rows_read(&mask, n, &mut rows);
+                assert!(rows.contains(&false), "some rows unread");
+                let mut garbled = padded.clone();
+                for (bytes, _) in garbled
+                    .chunks_exact_mut((n + 2) * cin)
+                    .zip(&rows)
+                    .filter(|(_, read)| !**read)
+                {
+                    bytes.fill(0xab);
+                }
+                let mut again = start.clone();
+                // SAFETY: supported() checked the features.
+                unsafe {
+                    q.run(
+                        &garbled,
+                        0.01,
+                        n,
+                        &mut again,
+                        accumulate,
+                        true,
+                        Some(region),
+                    )
+                };
+                assert!(
+                    got.iter()
+                        .zip(&again)
+                        .all(|(a, b)| a.to_bits() == b.to_bits())
+                );
             }
         }
     }
@@ -588,7 +646,7 @@ mod tests {
         // n = 1, one channel: a row of one cube between two zero cubes
         let x = [0.013];
         let mut buffer = Vec::new();
-        let (q, s) = quantize(&x, 1, 1, &mut buffer);
+        let (q, s) = quantize(&x, 1, 1, None, &mut buffer);
         assert_eq!((q, s), (&[0, 255, 0][..], 0.013 / 255.0));
         // n = 2, three channels, rows padded by one cube
         let x: Vec<f32> = [0.0, 1.0, 0.5, 2.0, 0.013, 1.999]
@@ -596,7 +654,7 @@ mod tests {
             .cycle()
             .take(24)
             .collect();
-        let (q, s) = quantize(&x, 2, 1, &mut buffer);
+        let (q, s) = quantize(&x, 2, 1, None, &mut buffer);
         assert!((s - 2.0 / 255.0).abs() < 1e-9);
         assert_eq!(q.len(), 4 * 4 * 3);
         for (row, bytes) in x.chunks_exact(6).zip(q.chunks_exact(12)) {
@@ -607,7 +665,10 @@ mod tests {
         }
         assert_eq!((q[3], q[6]), (0, 255));
         // a smaller input reuses the buffer: only its own bytes count
-        assert_eq!(quantize(&[0.0; 8], 2, 0, &mut buffer), (&[0u8; 8][..], 1.0));
+        assert_eq!(
+            quantize(&[0.0; 8], 2, 0, None, &mut buffer),
+            (&[0u8; 8][..], 1.0)
+        );
         // the vector path (where the CPU has it) gives the scalar loop's bytes
         let long: Vec<f32> = (0..1000)
             .map(|i| ((i * 7919) % 1013) as f32 * 0.037)
@@ -615,7 +676,7 @@ mod tests {
         let max = long.iter().fold(0.0f32, |m, &v| m.max(v));
         let mut scalar = vec![0; long.len()];
         bytes_scalar(&long, 1.0 / (max / 255.0), &mut scalar);
-        let (q, s) = quantize(&long, 10, 0, &mut buffer);
+        let (q, s) = quantize(&long, 10, 0, None, &mut buffer);
         assert_eq!((q, s), (&scalar[..], max / 255.0));
     }
 }

@@ -148,6 +148,8 @@ struct Scratch {
     near_y: Vec<bool>,
     /// an input quantized for the int8 convolutions
     quantized: Vec<u8>,
+    /// the input W rows an int8 convolution reads
+    rows_read: Vec<bool>,
 }
 
 impl Cnn {
@@ -430,6 +432,7 @@ impl Cnn {
             near_s: Vec::new(),
             near_y: Vec::new(),
             quantized: Vec::new(),
+            rows_read: Vec::new(),
         }
     }
 
@@ -513,12 +516,16 @@ impl Cnn {
                 match &b.int8 {
                     #[cfg(target_arch = "x86_64")]
                     Some((qa, qb)) if self.int8 => {
-                        let (xq, sx) = conv_int8::quantize(x, n, qa.pad(), &mut s.quantized);
+                        qa.rows_read(near_a, n, &mut s.rows_read);
+                        let rows = Some(&s.rows_read[..]);
+                        let (xq, sx) = conv_int8::quantize(x, n, qa.pad(), rows, &mut s.quantized);
                         // SAFETY: `set_precision` enables int8 only where
                         // `conv_int8::supported()`.
                         unsafe { qa.run(xq, sx, n, t, false, true, region_a) };
                         lap(3 + 3 * bi, &mut profile);
-                        let (tq, st) = conv_int8::quantize(t, m, qb.pad(), &mut s.quantized);
+                        qb.rows_read(near_y, m, &mut s.rows_read);
+                        let rows = Some(&s.rows_read[..]);
+                        let (tq, st) = conv_int8::quantize(t, m, qb.pad(), rows, &mut s.quantized);
                         // SAFETY: as above.
                         unsafe { qb.run(tq, st, m, y, true, true, region_b) };
                     }

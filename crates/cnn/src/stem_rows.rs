@@ -45,6 +45,8 @@ pub(crate) struct Rows {
     /// `len` cubes of four bytes, channel value / scale + 128 (the fourth
     /// byte 128; empty and padding cubes all 128)
     bytes: Vec<u32>,
+    /// per occupied cube: its cube in the row buffers
+    cubes: Vec<u32>,
     len: usize,
 }
 
@@ -71,12 +73,15 @@ impl Rows {
         self.values.resize(used as usize * self.len * CIN, 0.0);
         self.reaches.clear();
         self.reaches.resize(used as usize, 0);
+        self.cubes.clear();
         for (cube, &i) in occupied.index.iter().enumerate() {
             let (row, w) = (i as usize / n, i as usize % n);
             // output ow sees inputs ow − pad .. ow − pad + K − 1
             let outputs = ((1u64 << K) - 1) << (w + pad) >> (K - 1);
             self.reaches[self.slot[row] as usize] |= outputs & output_bits(m);
-            let at = (self.slot[row] as usize * self.len + w + pad) * CIN;
+            let at = self.slot[row] as usize * self.len + w + pad;
+            self.cubes.push(at as u32);
+            let at = at * CIN;
             self.values[at..at + CIN]
                 .copy_from_slice(&occupied.values[cube * CIN..cube * CIN + CIN]);
         }
@@ -106,11 +111,12 @@ impl Rows {
         let scale = if max > 0.0 { max / 127.0 } else { 1.0 };
         let inv = 1.0 / scale;
         let byte = |v: f32| (round_half_even(v * inv).clamp(-127, 127) + 128) as u32;
+        // every cube 128 (zero) but the occupied ones
         self.bytes.clear();
-        self.bytes.reserve(self.values.len() / CIN);
-        for c in self.values.chunks_exact(CIN) {
-            self.bytes
-                .push(byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 128 << 24);
+        self.bytes.resize(self.values.len() / CIN, 0x8080_8080);
+        for &cube in &self.cubes {
+            let c = &self.values[cube as usize * CIN..cube as usize * CIN + CIN];
+            self.bytes[cube as usize] = byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 128 << 24;
         }
         scale
     }
