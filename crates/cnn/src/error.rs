@@ -23,6 +23,14 @@ pub enum CnnError {
         /// what does not fit
         message: String,
     },
+    /// A sparse input sample ([`crate::Cnn::forward_sparse`]) is malformed.
+    #[error("sparse input sample {sample}: {message}")]
+    SparseSample {
+        /// its position in the batch
+        sample: usize,
+        /// what is wrong
+        message: String,
+    },
     /// An input or output buffer has the wrong length.
     #[error("{what} has {actual} values, expected {expected}")]
     BufferSize {

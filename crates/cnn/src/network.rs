@@ -281,7 +281,7 @@ impl Cnn {
         let mut out = vec![0.0; cnn.outputs()];
         let mut background = Background::default();
         cnn.run(
-            &vec![0.0; cnn.grid_len()],
+            Grid::Sparse(&[], &[]),
             &mut s,
             Some(&mut out),
             Some(&mut background),
@@ -376,7 +376,65 @@ impl Cnn {
     /// the same batch size.
     pub fn forward(&self, grids: &[f32], out: &mut [f32]) -> Result<(), CnnError> {
         self.check_buffers(grids, out)?;
-        let (g, no) = (self.grid_len(), self.outputs());
+        let g = self.grid_len();
+        self.forward_runs(|i| Grid::Dense(&grids[i * g..(i + 1) * g]), out);
+        Ok(())
+    }
+
+    /// [`Self::forward`] on sparse grids: per sample, the indices of its
+    /// occupied cubes (`(d·H + h)·W + w`, ascending) and their three channel
+    /// values, cube after cube (what `normalnet_voxel::SparseGrid` holds).
+    /// The same outputs as `forward` on the dense grids, without writing,
+    /// reading or clearing `3·D·H·W` values per sample.
+    ///
+    /// # Errors
+    /// [`CnnError::BufferSize`] when `out` does not hold one output row per
+    /// sample; [`CnnError::SparseSample`] naming a sample whose indices are
+    /// not ascending or outside the grid, or whose values are not three per
+    /// cube.
+    pub fn forward_sparse(
+        &self,
+        samples: &[(&[u32], &[f32])],
+        out: &mut [f32],
+    ) -> Result<(), CnnError> {
+        let no = self.outputs();
+        if out.len() != samples.len() * no {
+            return Err(CnnError::BufferSize {
+                what: "output batch",
+                actual: out.len(),
+                expected: samples.len() * no,
+            });
+        }
+        let cubes = self.grid.pow(3);
+        for (sample, &(index, values)) in samples.iter().enumerate() {
+            let bad = |message: String| CnnError::SparseSample { sample, message };
+            if values.len() != 3 * index.len() {
+                return Err(bad(format!(
+                    "{} values for {} cubes (3 channels each)",
+                    values.len(),
+                    index.len()
+                )));
+            }
+            if let Some(w) = index.windows(2).position(|w| w[0] >= w[1]) {
+                return Err(bad(format!(
+                    "cube indices not ascending at position {}",
+                    w + 1
+                )));
+            }
+            if let Some(&last) = index.last().filter(|&&i| i as usize >= cubes) {
+                return Err(bad(format!(
+                    "cube index {last} outside the {cubes}-cube grid"
+                )));
+            }
+        }
+        self.forward_runs(|i| Grid::Sparse(samples[i].0, samples[i].1), out);
+        Ok(())
+    }
+
+    /// The network on `out.len() / outputs` samples, sample `i` given by
+    /// `sample(i)`.
+    fn forward_runs<'a>(&self, sample: impl Fn(usize) -> Grid<'a> + Sync, out: &mut [f32]) {
+        let no = self.outputs();
         // Runs of a few samples, so that a thread slowed by other work (the
         // voxelizer shares the cores) does not leave the others idle at the
         // end of the batch; each run borrows a thread's buffers from a pool
@@ -387,23 +445,21 @@ impl Cnn {
             let mut p = pool.lock().unwrap_or_else(|e| e.into_inner());
             p.pop()
         };
-        grids
-            .par_chunks(RUN * g)
-            .zip(out.par_chunks_mut(RUN * no))
-            .for_each(|(grids, out)| {
+        out.par_chunks_mut(RUN * no)
+            .enumerate()
+            .for_each(|(r, out)| {
                 let mut s = take().unwrap_or_else(|| self.scratch());
                 // the convolutions sample by sample, the fully connected
                 // head for the whole run (each weight row read once)
                 let width = self.pooled_width();
                 let mut pooled = Vec::with_capacity(RUN * width);
-                for grid in grids.chunks_exact(g) {
-                    self.run(grid, &mut s, None, None, None);
+                for i in RUN * r..RUN * r + out.len() / no {
+                    self.run(sample(i), &mut s, None, None, None);
                     pooled.extend_from_slice(&s.v[..width]);
                 }
                 self.head(&pooled, out);
                 pool.lock().unwrap_or_else(|e| e.into_inner()).push(s);
             });
-        Ok(())
     }
 
     /// `grids` holds whole samples and `out` one output row for each.
@@ -441,7 +497,7 @@ impl Cnn {
     /// the occupied voxels and copies the background elsewhere.
     fn run(
         &self,
-        grid: &[f32],
+        grid: Grid,
         s: &mut Scratch,
         out: Option<&mut [f32]>,
         mut record: Option<&mut Background>,
@@ -458,7 +514,10 @@ impl Cnn {
                 clock = now;
             }
         };
-        s.occupied.gather(grid, 3);
+        match grid {
+            Grid::Dense(grid) => s.occupied.gather(grid, 3),
+            Grid::Sparse(index, values) => s.occupied.set(index, values),
+        }
         lap(0, &mut profile);
         let mut n = self.stem_side;
         let mut c = self.stem.cout;
@@ -605,10 +664,19 @@ impl Cnn {
         };
         let mut s = self.scratch();
         for (grid, o) in grids.chunks_exact(g).zip(out.chunks_exact_mut(no)) {
-            self.run(grid, &mut s, Some(o), None, Some(&mut times));
+            self.run(Grid::Dense(grid), &mut s, Some(o), None, Some(&mut times));
         }
         Ok(times)
     }
+}
+
+/// One input sample.
+#[derive(Clone, Copy)]
+enum Grid<'a> {
+    /// `[3, D, H, W]`
+    Dense(&'a [f32]),
+    /// the occupied cubes' indices (ascending) and their values, channels-last
+    Sparse(&'a [u32], &'a [f32]),
 }
 
 /// Seconds per layer of [`Cnn::forward_profiled`].

@@ -15,6 +15,15 @@ pub(crate) struct Occupied {
 }
 
 impl Occupied {
+    /// The occupied cubes given by their indices (ascending) and values
+    /// (`cin` per cube).
+    pub(crate) fn set(&mut self, index: &[u32], values: &[f32]) {
+        self.index.clear();
+        self.index.extend_from_slice(index);
+        self.values.clear();
+        self.values.extend_from_slice(values);
+    }
+
     /// Collects the cubes of `grid` with any non-zero channel.
     pub(crate) fn gather(&mut self, grid: &[f32], cin: usize) {
         self.index.clear();

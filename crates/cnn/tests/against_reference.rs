@@ -218,3 +218,53 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
     // the row stem off: the scatter stem in f32
     assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
 }
+
+/// The occupied cubes of a dense `[3, D, H, W]` grid as (indices, values
+/// channels-last).
+fn sparse_of(grid: &[f32]) -> (Vec<u32>, Vec<f32>) {
+    let cubes = grid.len() / 3;
+    let index: Vec<u32> = (0..cubes)
+        .filter(|&i| (0..3).any(|c| grid[c * cubes + i] != 0.0))
+        .map(|i| i as u32)
+        .collect();
+    let values = index
+        .iter()
+        .flat_map(|&i| (0..3).map(move |c| grid[c * cubes + i as usize]))
+        .collect();
+    (index, values)
+}
+
+#[test]
+fn sparse_inputs_give_the_dense_outputs_and_bad_ones_are_named() {
+    let (grid, batch) = (21, 10);
+    let w = common::random_net(8, grid, [16, 32, 64]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(900 + i as u64, grid))
+        .collect();
+    let sparse: Vec<(Vec<u32>, Vec<f32>)> =
+        grids.chunks_exact(cnn.grid_len()).map(sparse_of).collect();
+    let samples: Vec<(&[u32], &[f32])> = sparse.iter().map(|(i, v)| (&i[..], &v[..])).collect();
+    // every arithmetic this CPU has: the same bits either way
+    for precision in [Precision::F32, Precision::Int8] {
+        cnn.set_precision(precision);
+        cnn.set_int8_stem(true);
+        let mut dense = vec![0.0f32; batch * 18];
+        cnn.forward(&grids, &mut dense).unwrap();
+        let mut out = vec![0.0f32; batch * 18];
+        cnn.forward_sparse(&samples, &mut out).unwrap();
+        assert_eq!(out, dense, "{precision:?}");
+    }
+    let mut out = vec![0.0f32; 18];
+    let named = |samples: &[(&[u32], &[f32])], out: &mut [f32]| {
+        cnn.forward_sparse(samples, out).unwrap_err().to_string()
+    };
+    let cubes = (grid * grid * grid) as u32;
+    assert!(named(&[(&[3, 3], &[0.5; 6])], &mut out).contains("not ascending at position 1"));
+    assert!(named(&[(&[2, cubes], &[0.5; 6])], &mut out).contains(&format!("cube index {cubes}")));
+    assert!(named(&[(&[2], &[0.5; 2])], &mut out).contains("2 values for 1 cubes"));
+    assert!(named(&[(&[2], &[0.5; 3])], &mut [0.0; 17]).contains("output batch"));
+    // no occupied cube at all is a valid sample
+    cnn.forward_sparse(&[(&[], &[])], &mut out).unwrap();
+    assert!(out.iter().all(|v| v.is_finite()));
+}

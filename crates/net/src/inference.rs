@@ -18,7 +18,7 @@ use normalnet_filters::{FOLD_GUARD_COS, VertexUpdate, VertexUpdateBuffers, verte
 use normalnet_mesh::geometry::{face_normals, mean_edge_length};
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Progress, Topology};
-use normalnet_voxel::{Frame, VoxelParams, Voxelizer};
+use normalnet_voxel::{Frame, SparseGrid, VoxelParams, Voxelizer};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -603,15 +603,13 @@ pub fn filtered_normals_of(
     let fallback = face_normals(mesh);
     times.voxelize_s += t.elapsed().as_secs_f64();
     let n = faces.len();
-    let grid_len = voxel.grid_len();
     let batch = batch.max(1);
-    // two buffers in flight: one being voxelized, one in the network
-    let (full_tx, full_rx) = sync_channel::<(usize, Vec<f32>, Vec<Frame>, f64)>(1);
-    let (empty_tx, empty_rx) = sync_channel::<Vec<f32>>(3);
+    // two batches in flight: one being voxelized, one in the network; the
+    // grids go sparse (only their occupied cubes) from one to the other
+    let (full_tx, full_rx) = sync_channel::<(usize, Vec<SparseGrid>, Vec<Frame>, f64)>(1);
+    let (empty_tx, empty_rx) = sync_channel::<Vec<SparseGrid>>(3);
     for _ in 0..2 {
-        empty_tx
-            .send(Vec::with_capacity(batch.min(n) * grid_len))
-            .ok();
+        empty_tx.send(Vec::new()).ok();
     }
     let result = std::thread::scope(|scope| -> Result<(), NetError> {
         let voxelizer = &voxelizer;
@@ -624,14 +622,11 @@ pub fn filtered_normals_of(
                 let Ok(mut buf) = empty_rx.recv() else { return };
                 let end = (start + batch).min(n);
                 let t = Instant::now();
-                // every grid is filled by the voxelizer (which zeroes it
-                // first): no need to clear what the last batch left
-                buf.resize((end - start) * grid_len, 0.0);
                 let batch_faces = &faces[start..end];
                 let batch_yaws: Option<Vec<f64>> =
                     yaws.map(|y| batch_faces.iter().map(|&f| y[f as usize]).collect());
                 let frames =
-                    voxelizer.voxelize_batch_yaw(batch_faces, batch_yaws.as_deref(), &mut buf);
+                    voxelizer.voxelize_batch_sparse(batch_faces, batch_yaws.as_deref(), &mut buf);
                 let dt = t.elapsed().as_secs_f64();
                 if full_tx.send((start, buf, frames, dt)).is_err() {
                     return;
@@ -643,7 +638,9 @@ pub fn filtered_normals_of(
             let t = Instant::now();
             let len = frames.len();
             let mut out = vec![0.0f32; len * NUM_OUTPUTS];
-            cnn.forward(&buf, &mut out)
+            let samples: Vec<(&[u32], &[f32])> =
+                buf.iter().map(|g| (&g.cells[..], &g.values[..])).collect();
+            cnn.forward_sparse(&samples, &mut out)
                 .map_err(|e| NetError::InvalidParameter {
                     name: "network",
                     message: e.to_string(),

@@ -23,4 +23,4 @@ pub use loader::{Batch, Loader, LoaderConfig};
 pub use params::VoxelParams;
 pub use sampler::{BalancedSampler, SampleRef};
 pub use samples::{A_P_EDGES, MU_GS, SampleSource};
-pub use voxelizer::{Scratch, Voxelizer};
+pub use voxelizer::{Scratch, SparseGrid, Voxelizer};

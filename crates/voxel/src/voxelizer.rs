@@ -65,6 +65,9 @@ pub struct Scratch {
     generation: u32,
     queue: Vec<u32>,
     counts: Vec<u32>,
+    /// per cube, channels-last: the sum of the normals of the faces that
+    /// overlap it (zero again once the face is written out)
+    sums: Vec<[f32; 3]>,
     touched: Vec<u32>,
     occupied: usize,
     candidates: usize,
@@ -100,6 +103,7 @@ impl Scratch {
         }
         if self.counts.len() != num_cells {
             self.counts = vec![0; num_cells];
+            self.sums = vec![[0.0; 3]; num_cells];
         }
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
@@ -229,11 +233,6 @@ impl Voxelizer {
         yaw: f64,
         out: &mut [f32],
     ) -> Frame {
-        let n_faces = self.num_faces();
-        assert!(
-            f < n_faces,
-            "face {f} out of range (mesh has {n_faces} faces)"
-        );
         let grid_len = self.params.grid_len();
         assert_eq!(
             out.len(),
@@ -241,12 +240,65 @@ impl Voxelizer {
             "grid buffer has len {}, expected 3·side³ = {grid_len}",
             out.len()
         );
+        let frame = self.accumulate(scratch, f, yaw);
+        let cells = grid_len / 3;
+        out.fill(0.0);
+        for &cell in &scratch.touched {
+            let cell = cell as usize;
+            let count = std::mem::replace(&mut scratch.counts[cell], 0);
+            let sum = std::mem::replace(&mut scratch.sums[cell], [0.0; 3]);
+            let s = 1.0 / count as f32;
+            for (c, v) in sum.into_iter().enumerate() {
+                out[c * cells + cell] = v * s;
+            }
+        }
+        frame
+    }
+
+    /// [`Self::voxelize_face_with`] into a [`SparseGrid`]: only the cubes
+    /// with a non-zero channel (the same values as in the dense grid).
+    /// Time: O(candidate faces × cubes of their bounding boxes) plus
+    /// sorting the occupied cubes; nothing of size `side³` is cleared.
+    ///
+    /// # Panics
+    /// If `f` is out of range.
+    pub fn voxelize_face_sparse(
+        &self,
+        scratch: &mut Scratch,
+        f: usize,
+        yaw: f64,
+        out: &mut SparseGrid,
+    ) -> Frame {
+        let frame = self.accumulate(scratch, f, yaw);
+        scratch.touched.sort_unstable();
+        out.cells.clear();
+        out.values.clear();
+        for &cell in &scratch.touched {
+            let c = cell as usize;
+            let count = std::mem::replace(&mut scratch.counts[c], 0);
+            let sum = std::mem::replace(&mut scratch.sums[c], [0.0; 3]);
+            let s = 1.0 / count as f32;
+            let v = sum.map(|v| v * s);
+            if v.iter().any(|&v| v != 0.0) {
+                out.cells.push(cell);
+                out.values.extend_from_slice(&v);
+            }
+        }
+        frame
+    }
+
+    /// Sums, per cube of face `f`'s grid, the rotated normals of the faces
+    /// overlapping it into `scratch` (`sums`, `counts`, `touched`).
+    fn accumulate(&self, scratch: &mut Scratch, f: usize, yaw: f64) -> Frame {
+        let n_faces = self.num_faces();
+        assert!(
+            f < n_faces,
+            "face {f} out of range (mesh has {n_faces} faces)"
+        );
         let side = self.params.side();
         let cells = side * side * side;
         let frame = self.frame(f, yaw);
-        out.fill(0.0);
         scratch.prepare(n_faces, cells);
-
         // Local grid units: q = M (p − c_f) + (T_s + ½), cube (i,j,k) = [i,i+1]×….
         let inv = 1.0 / self.l_c;
         let m = frame.rotation.map(|row| vec3::scale(row, inv));
@@ -303,20 +355,13 @@ impl Voxelizer {
                             scratch.touched.push(cell as u32);
                         }
                         *count += 1;
-                        out[cell] += n_local[0];
-                        out[cells + cell] += n_local[1];
-                        out[2 * cells + cell] += n_local[2];
+                        let sum = &mut scratch.sums[cell];
+                        for (s, v) in sum.iter_mut().zip(n_local) {
+                            *s += v;
+                        }
                     }
                 }
             }
-        }
-        for &cell in &scratch.touched {
-            let cell = cell as usize;
-            let count = std::mem::replace(&mut scratch.counts[cell], 0);
-            let s = 1.0 / count as f32;
-            out[cell] *= s;
-            out[cells + cell] *= s;
-            out[2 * cells + cell] *= s;
         }
         scratch.occupied = scratch.touched.len();
         scratch.candidates = candidates;
@@ -363,6 +408,41 @@ impl Voxelizer {
             })
             .collect()
     }
+
+    /// [`Self::voxelize_batch_yaw`] into sparse grids: `out` is resized to
+    /// one [`SparseGrid`] per face (their buffers reused).
+    ///
+    /// # Panics
+    /// If a face is out of range or `yaws` has the wrong length.
+    pub fn voxelize_batch_sparse(
+        &self,
+        faces: &[u32],
+        yaws: Option<&[f64]>,
+        out: &mut Vec<SparseGrid>,
+    ) -> Vec<Frame> {
+        if let Some(y) = yaws {
+            assert_eq!(y.len(), faces.len(), "one yaw per face");
+        }
+        out.resize_with(faces.len(), SparseGrid::default);
+        out.par_iter_mut()
+            .zip(faces.par_iter())
+            .enumerate()
+            .map_init(Scratch::new, |scratch, (idx, (grid, &f))| {
+                let yaw = yaws.map_or(0.0, |y| y[idx]);
+                self.voxelize_face_sparse(scratch, f as usize, yaw, grid)
+            })
+            .collect()
+    }
+}
+
+/// The non-empty cubes of one grid: what the dense `[3, D, H, W]` grid
+/// holds, without its zeros.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SparseGrid {
+    /// cube indices `(i·side + j)·side + k`, ascending
+    pub cells: Vec<u32>,
+    /// the three channels of each cube of `cells`, cube after cube
+    pub values: Vec<f32>,
 }
 
 /// `n̄` for every face: normalised `Σ a_g n_g` over the 2-ring patch
@@ -449,6 +529,43 @@ mod tests {
             }
             assert_eq!(occupied, side * side);
             assert_eq!(scratch.last_occupied(), side * side);
+        }
+    }
+
+    #[test]
+    fn sparse_grids_hold_the_dense_grids_non_zero_cubes() {
+        // a bumpy surface: cubes shared by faces of different normals
+        let mut mesh = flat_patch(16, 0.2);
+        for (i, p) in mesh.positions.iter_mut().enumerate() {
+            p[2] = ((i * 7919) % 13) as f64 * 0.04;
+        }
+        let topo = Topology::new(mesh.num_vertices(), &mesh.faces);
+        let params = VoxelParams::lite();
+        let vox = Voxelizer::new(&mesh, &topo, params).unwrap();
+        let faces: Vec<u32> = (0..mesh.num_faces() as u32).step_by(5).collect();
+        let yaws: Vec<f64> = faces.iter().map(|&f| f as f64 * 0.1).collect();
+        let mut dense = vec![0.0f32; faces.len() * params.grid_len()];
+        let frames = vox.voxelize_batch_yaw(&faces, Some(&yaws), &mut dense);
+        // the buffers of an earlier, larger batch are reused
+        let mut sparse = vec![SparseGrid::default(); faces.len() + 3];
+        sparse[0].cells.push(5);
+        let sparse_frames = vox.voxelize_batch_sparse(&faces, Some(&yaws), &mut sparse);
+        assert_eq!(frames, sparse_frames);
+        assert_eq!(sparse.len(), faces.len());
+        let cells = params.side().pow(3);
+        for (grid, s) in dense.chunks_exact(params.grid_len()).zip(&sparse) {
+            let want: Vec<u32> = (0..cells)
+                .filter(|&c| (0..3).any(|ch| grid[ch * cells + c] != 0.0))
+                .map(|c| c as u32)
+                .collect();
+            assert!(!want.is_empty());
+            assert_eq!(s.cells, want);
+            for (i, &c) in s.cells.iter().enumerate() {
+                for ch in 0..3 {
+                    let d = grid[ch * cells + c as usize];
+                    assert_eq!(s.values[3 * i + ch].to_bits(), d.to_bits());
+                }
+            }
         }
     }
 
