@@ -176,12 +176,13 @@ pub(crate) fn supported() -> bool {
 /// call) and s (1 for an all-zero input). With `rows` (one flag per W row,
 /// as [`Int8Conv::rows_read`] gives), only the flagged rows are written (the
 /// others keep what the buffer held); s is the whole input's either way.
+/// `max`, where the caller knows it, is max(x) (else it is computed).
 /// AVX-512 where the CPU has it (the same bytes as the scalar loop).
 pub(crate) fn quantize<'a>(
     x: &[f32],
     n: usize,
     pad: usize,
-    rows: Option<&[bool]>,
+    (rows, max): (Option<&[bool]>, Option<f32>),
     buffer: &'a mut Vec<u8>,
 ) -> (&'a [u8], f32) {
     let cin = x.len() / (n * n * n).max(1);
@@ -196,10 +197,14 @@ pub(crate) fn quantize<'a>(
     let avx512 = std::arch::is_x86_feature_detected!("avx512f");
     #[cfg(not(target_arch = "x86_64"))]
     let avx512 = false;
-    let max = match avx512 {
+    let max = match (max, avx512) {
+        (Some(max), _) => {
+            debug_assert_eq!(max, x.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v)));
+            max.max(0.0)
+        }
         // SAFETY: the feature was detected.
         #[cfg(target_arch = "x86_64")]
-        true => unsafe { max_avx512(x) },
+        (None, true) => unsafe { max_avx512(x) },
         _ => x.iter().fold(0.0f32, |m, &v| m.max(v)),
     };
     let scale = if max > 0.0 { max / 255.0 } else { 1.0 };
@@ -488,7 +493,7 @@ mod tests {
                 f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
                 let mut got = start.clone();
                 let mut buffer = Vec::new();
-                let (xq, sx) = quantize(&x, n, q.pad(), None, &mut buffer);
+                let (xq, sx) = quantize(&x, n, q.pad(), (None, None), &mut buffer);
                 // SAFETY: supported() checked the features.
                 unsafe { q.run(xq, sx, n, &mut got, accumulate, relu, None) };
                 let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
@@ -646,7 +651,7 @@ mod tests {
         // n = 1, one channel: a row of one cube between two zero cubes
         let x = [0.013];
         let mut buffer = Vec::new();
-        let (q, s) = quantize(&x, 1, 1, None, &mut buffer);
+        let (q, s) = quantize(&x, 1, 1, (None, Some(0.013)), &mut buffer);
         assert_eq!((q, s), (&[0, 255, 0][..], 0.013 / 255.0));
         // n = 2, three channels, rows padded by one cube
         let x: Vec<f32> = [0.0, 1.0, 0.5, 2.0, 0.013, 1.999]
@@ -654,7 +659,7 @@ mod tests {
             .cycle()
             .take(24)
             .collect();
-        let (q, s) = quantize(&x, 2, 1, None, &mut buffer);
+        let (q, s) = quantize(&x, 2, 1, (None, None), &mut buffer);
         assert!((s - 2.0 / 255.0).abs() < 1e-9);
         assert_eq!(q.len(), 4 * 4 * 3);
         for (row, bytes) in x.chunks_exact(6).zip(q.chunks_exact(12)) {
@@ -666,7 +671,7 @@ mod tests {
         assert_eq!((q[3], q[6]), (0, 255));
         // a smaller input reuses the buffer: only its own bytes count
         assert_eq!(
-            quantize(&[0.0; 8], 2, 0, None, &mut buffer),
+            quantize(&[0.0; 8], 2, 0, (None, None), &mut buffer),
             (&[0u8; 8][..], 1.0)
         );
         // the vector path (where the CPU has it) gives the scalar loop's bytes
@@ -676,7 +681,7 @@ mod tests {
         let max = long.iter().fold(0.0f32, |m, &v| m.max(v));
         let mut scalar = vec![0; long.len()];
         bytes_scalar(&long, 1.0 / (max / 255.0), &mut scalar);
-        let (q, s) = quantize(&long, 10, 0, None, &mut buffer);
+        let (q, s) = quantize(&long, 10, 0, (None, None), &mut buffer);
         assert_eq!((q, s), (&scalar[..], max / 255.0));
     }
 }

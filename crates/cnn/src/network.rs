@@ -522,6 +522,8 @@ impl Cnn {
         let mut n = self.stem_side;
         let mut c = self.stem.cout;
         let stem_out = &mut s.x[..n * n * n * c];
+        // the stem's largest output, where the stem tells it
+        let mut stem_max = None;
         match self.row_stem {
             #[cfg(target_arch = "x86_64")]
             true => {
@@ -533,9 +535,9 @@ impl Cnn {
                         let (p, g) = (self.stem.pad, self.grid);
                         // SAFETY: int8 precision means `conv_int8::supported()`
                         // (F, BW, VNNI); `set_row_stem` checked `serves`.
-                        unsafe {
+                        stem_max = Some(unsafe {
                             stem_rows::run_int8(q, p, &s.rows, scale, g, stem_out, true, near)
-                        };
+                        });
                     }
                     // SAFETY: `set_row_stem` checked AVX-512F and `serves`.
                     _ => unsafe {
@@ -576,14 +578,16 @@ impl Cnn {
                     #[cfg(target_arch = "x86_64")]
                     Some((qa, qb)) if self.int8 => {
                         qa.rows_read(near_a, n, &mut s.rows_read);
-                        let rows = Some(&s.rows_read[..]);
+                        // the block's input is the stem's output in block 1
+                        let max = stem_max.take();
+                        let rows = (Some(&s.rows_read[..]), max);
                         let (xq, sx) = conv_int8::quantize(x, n, qa.pad(), rows, &mut s.quantized);
                         // SAFETY: `set_precision` enables int8 only where
                         // `conv_int8::supported()`.
                         unsafe { qa.run(xq, sx, n, t, false, true, region_a) };
                         lap(3 + 3 * bi, &mut profile);
                         qb.rows_read(near_y, m, &mut s.rows_read);
-                        let rows = Some(&s.rows_read[..]);
+                        let rows = (Some(&s.rows_read[..]), None);
                         let (tq, st) = conv_int8::quantize(t, m, qb.pad(), rows, &mut s.quantized);
                         // SAFETY: as above.
                         unsafe { qb.run(tq, st, m, y, true, true, region_b) };

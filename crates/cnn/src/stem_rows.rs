@@ -42,9 +42,9 @@ pub(crate) struct Rows {
     /// row it feeds has an occupied cube of this row in its W window
     reaches: Vec<u64>,
     /// per non-empty row, for [`run_int8`] (after [`Rows::quantize`]):
-    /// `len` cubes of four bytes, channel value / scale + 128 (the fourth
-    /// byte 128; empty and padding cubes all 128)
-    bytes: Vec<u32>,
+    /// `len` cubes of three bytes, channel value / scale + 128 (empty and
+    /// padding cubes 128), then [`SLACK`] bytes after the last row
+    bytes: Vec<u8>,
     /// per occupied cube: its cube in the row buffers
     cubes: Vec<u32>,
     len: usize,
@@ -110,13 +110,18 @@ impl Rows {
             .fold(0.0f32, f32::max);
         let scale = if max > 0.0 { max / 127.0 } else { 1.0 };
         let inv = 1.0 / scale;
-        let byte = |v: f32| (round_half_even(v * inv).clamp(-127, 127) + 128) as u32;
+        let byte = |v: f32| round_half_even(v * inv).clamp(-127, 127) + 128;
         // every cube 128 (zero) but the occupied ones
         self.bytes.clear();
-        self.bytes.resize(self.values.len() / CIN, 0x8080_8080);
+        self.bytes.resize(self.values.len() + SLACK, 128);
         for &cube in &self.cubes {
-            let c = &self.values[cube as usize * CIN..cube as usize * CIN + CIN];
-            self.bytes[cube as usize] = byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 128 << 24;
+            let at = cube as usize * CIN;
+            for (b, &v) in self.bytes[at..at + CIN]
+                .iter_mut()
+                .zip(&self.values[at..at + CIN])
+            {
+                *b = byte(v) as u8;
+            }
         }
         scale
     }
@@ -139,11 +144,21 @@ fn round_half_even(x: f32) -> i32 {
     }
 }
 
-/// The stem's weights in signed bytes for [`run_int8`]: per tap `[16 co][4]`
-/// (three input channels and a zero), one scale per output channel.
+/// Bytes of input read past a row's last cube by [`run_int8`]'s last
+/// window (its 16th byte, whose weight is zero).
+const SLACK: usize = 4;
+
+/// Bytes of one (kd, kh) row of weights in [`Int8Stem`]: the 15 (kw, ci)
+/// pairs of a W window and a zero, as four i32 lanes of four bytes.
+const WINDOW: usize = 16;
+
+/// The stem's weights in signed bytes for [`run_int8`], one scale per output
+/// channel. Per (kd, kh), the 15 weights of a W window (kw, ci) in the order
+/// of the packed input bytes (`3·kw + ci`) and a zero, as four groups of four
+/// bytes: `[kd·K + kh][group][co][4]`.
 #[derive(Clone, Debug)]
 pub(crate) struct Int8Stem {
-    /// `[(kd·K + kh)·K + kw][co][4]`
+    /// `[kd·K + kh][WINDOW / 4][co][4]`
     w: Vec<i8>,
     /// per output channel: f32 weight = byte · scale
     scale: Vec<f32>,
@@ -159,18 +174,20 @@ impl Int8Stem {
         if c.k != K || c.cin != CIN || c.cout != CO || c.stride != 1 {
             return None;
         }
-        let taps = K * K * K;
+        const { assert!(K * CIN < WINDOW) };
         let scale = crate::conv_int8::weight_scales(c);
-        let mut w = vec![0i8; taps * CO * 4];
+        let mut w = vec![0i8; K * K * WINDOW * CO];
         let mut offset = vec![0i32; K * K * CO];
-        for tap in 0..taps {
+        for tap in 0..K * K * K {
+            let (row, kw) = (tap / K, tap % K);
             for ci in 0..CIN {
                 for co in 0..CO {
                     let q = (c.w[(tap * CIN + ci) * CO + co] / scale[co])
                         .round()
                         .clamp(-127.0, 127.0) as i8;
-                    w[(tap * CO + co) * 4 + ci] = q;
-                    offset[tap / K * CO + co] += 128 * i32::from(q);
+                    let byte = CIN * kw + ci;
+                    w[((row * WINDOW / 4 + byte / 4) * CO + co) * 4 + byte % 4] = q;
+                    offset[row * CO + co] += 128 * i32::from(q);
                 }
             }
         }
@@ -180,6 +197,14 @@ impl Int8Stem {
             offset,
             bias: c.b.clone(),
         })
+    }
+
+    /// The byte of the weight of tap `(kd·K + kh)·K + kw`, input channel
+    /// `ci`, output channel `co`.
+    #[cfg(test)]
+    fn weight(&self, tap: usize, ci: usize, co: usize) -> i8 {
+        let (row, byte) = (tap / K, CIN * (tap % K) + ci);
+        self.w[((row * WINDOW / 4 + byte / 4) * CO + co) * 4 + byte % 4]
     }
 }
 
@@ -232,6 +257,7 @@ fn reaching_rows(
 /// in every cube; otherwise `block(c0, chunk, reach, dst)` computes output
 /// cubes `c0..c0 + CHUNK` (bits `chunk`) of the row `dst` from `reach`.
 /// With `near`, also the output cubes whose window holds an occupied cube.
+/// Returns whether any row got the background.
 #[inline(always)]
 fn for_each_block(
     rows: &Rows,
@@ -240,7 +266,8 @@ fn for_each_block(
     background: [f32; CO],
     mut near: Option<&mut Vec<bool>>,
     mut block: impl FnMut(usize, u64, &[(usize, usize, u64)], &mut [f32]),
-) {
+) -> bool {
+    let mut any_background = false;
     assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
     assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
     if let Some(near) = near.as_deref_mut() {
@@ -259,6 +286,7 @@ fn for_each_block(
                 for cube in dst.chunks_exact_mut(CO) {
                     cube.copy_from_slice(&background);
                 }
+                any_background = true;
                 continue;
             }
             if let Some(near) = near.as_deref_mut() {
@@ -271,6 +299,7 @@ fn for_each_block(
             }
         }
     }
+    any_background
 }
 
 /// The ReLU's floor (0, or −∞ without it) and `max(bias, floor)` as an
@@ -364,6 +393,7 @@ pub(crate) unsafe fn run(
 /// they are offset by 128 into unsigned bytes and the offset's share of each
 /// sum ([`Int8Stem`]'s `offset`, per tap row taken) is subtracted again: the
 /// i32 sums are exact, the error is the rounding of inputs and weights.
+/// Returns the largest value of `out`.
 ///
 /// # Safety
 /// The CPU must have AVX-512 F, BW and VNNI, and `serves(c, n)` must hold
@@ -379,12 +409,14 @@ pub(crate) unsafe fn run_int8(
     n: usize,
     out: &mut [f32],
     relu: bool,
-    near: Option<&mut Vec<bool>>,
-) {
+    mut near: Option<&mut Vec<bool>>,
+) -> f32 {
     use std::arch::x86_64::*;
     let m = crate::conv::output_side(n, K, 1, p);
+    assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
+    assert!(rows.len >= m + K - 1);
     assert!(
-        rows.bytes.len() == rows.values.len() / CIN,
+        rows.bytes.len() == rows.values.len() + SLACK,
         "rows not quantized"
     );
     // SAFETY: 16 output channels: 16 biases and scales.
@@ -396,46 +428,147 @@ pub(crate) unsafe fn run_int8(
         )
     };
     let (floor, background) = floor_and_background(bias, relu);
-    let block = |c0: usize, chunk: u64, reach: &[(usize, usize, u64)], dst: &mut [f32]| {
-        let mut acc = [_mm512_setzero_si512(); CHUNK];
-        let mut offset = _mm512_setzero_si512();
-        for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
-            // SAFETY: `(tap_row + 1)·K·CO·4 ≤ q.w.len()` and
-            // `(tap_row + 1)·CO ≤ q.offset.len()` (one (kd, kh)), and
-            // `x0 + c0 + CHUNK + K − 1 ≤ rows.bytes.len()` (`c0 < m`, rows of
-            // `len` cubes).
-            unsafe {
-                let w = q.w.as_ptr().add(tap_row * K * CO * 4);
-                let wr: [__m512i; K] =
-                    std::array::from_fn(|kw| _mm512_loadu_si512(w.add(kw * CO * 4).cast()));
-                offset = _mm512_add_epi32(
-                    offset,
-                    _mm512_loadu_si512(q.offset.as_ptr().add(tap_row * CO).cast()),
-                );
-                let x = rows.bytes.as_ptr().add(x0 + c0);
-                macro_rules! input {
-                    ($($j:literal)*) => {$(
-                        let v = _mm512_set1_epi32(*x.add($j) as i32);
-                        for (kw, wk) in wr.iter().enumerate() {
-                            if $j >= kw && $j - kw < CHUNK {
-                                acc[$j - kw] = _mm512_dpbusd_epi32(acc[$j - kw], v, *wk);
-                            }
-                        }
-                    )*};
+    let mut any_background = false;
+    // the largest output, for the next layer's quantization
+    let mut largest = _mm512_set1_ps(f32::NEG_INFINITY);
+    if let Some(near) = near.as_deref_mut() {
+        near.clear();
+        near.resize(m * m * m, false);
+    }
+    let tiles: [StemTile; 12] = [
+        stem_tile::<1>,
+        stem_tile::<2>,
+        stem_tile::<3>,
+        stem_tile::<4>,
+        stem_tile::<5>,
+        stem_tile::<6>,
+        stem_tile::<7>,
+        stem_tile::<8>,
+        stem_tile::<9>,
+        stem_tile::<10>,
+        stem_tile::<11>,
+        stem_tile::<12>,
+    ];
+    let mut sums = [_mm512_setzero_si512(); 12];
+    let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
+    for od in 0..m {
+        for oh in 0..m {
+            let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
+            let first = (od * m + oh) * m;
+            let dst = &mut out[first * CO..(first + m) * CO];
+            // the reached cubes lie in lo..hi (none: lo = hi = 0); the
+            // others sum to zero and take the background
+            let (lo, hi) = match reached {
+                0 => (0, 0),
+                r => (r.trailing_zeros() as usize, 64 - r.leading_zeros() as usize),
+            };
+            if hi - lo < m {
+                any_background = true;
+            }
+            for cube in dst[..lo * CO].chunks_exact_mut(CO) {
+                cube.copy_from_slice(&background);
+            }
+            for cube in dst[hi * CO..].chunks_exact_mut(CO) {
+                cube.copy_from_slice(&background);
+            }
+            if reached == 0 {
+                continue;
+            }
+            if let Some(near) = near.as_deref_mut() {
+                for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
+                    *flag = reached >> ow & 1 == 1;
                 }
-                const _: () = assert!(CHUNK + K - 1 == 11);
-                input!(0 1 2 3 4 5 6 7 8 9 10);
+            }
+            let mut c0 = lo;
+            while c0 < hi {
+                // equal tiles of at most 12 cubes
+                let parts = (hi - c0).div_ceil(tiles.len());
+                let t = (hi - c0).div_ceil(parts);
+                // SAFETY: the caller checked the features; `stem_tile`'s
+                // reads stay inside `rows.bytes` (checked above: rows of
+                // `len ≥ m + K − 1` cubes, SLACK bytes after the last).
+                unsafe { tiles[t - 1](q, rows, c0, &reach, &mut sums) };
+                for (o, &sum) in sums[..t].iter().enumerate() {
+                    let v =
+                        _mm512_max_ps(_mm512_fmadd_ps(_mm512_cvtepi32_ps(sum), scale, bias), floor);
+                    largest = _mm512_max_ps(largest, v);
+                    let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
+                    // SAFETY: `cube` holds 16 floats.
+                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), v) };
+                }
+                c0 += t;
             }
         }
-        for (o, a) in acc.iter().enumerate().take(m - c0) {
-            let sum = _mm512_cvtepi32_ps(_mm512_sub_epi32(*a, offset));
-            let v = _mm512_max_ps(_mm512_fmadd_ps(sum, scale, bias), floor);
-            let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
-            // SAFETY: `cube` holds 16 floats.
-            unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), v) };
+    }
+    let computed = _mm512_reduce_max_ps(largest);
+    match any_background {
+        true => background.into_iter().fold(computed, f32::max),
+        false => computed,
+    }
+}
+
+/// Writes the i32 sums (offset removed) of `t` output cubes into `sums[..t]`
+/// (the function at index `t − 1`).
+#[cfg(target_arch = "x86_64")]
+type StemTile = unsafe fn(
+    &Int8Stem,
+    &Rows,
+    usize,
+    &[(usize, usize, u64)],
+    &mut [std::arch::x86_64::__m512i; 12],
+);
+
+/// The int8 stem's sums for output cubes `c0 .. c0 + T` of one output row
+/// from its reaching rows `reach` (those with an occupied cube near the
+/// tile): per row, the four weight vectors of its (kd, kh) in registers,
+/// and for each cube its W window of 15 packed bytes (and one more, whose
+/// weight is zero) as four broadcast i32 — four `vpdpbusd` per cube and
+/// row, `T` chains in flight.
+///
+/// # Safety
+/// The CPU has AVX-512 F, BW and VNNI; `rows` is quantized, and `c0 + T +
+/// K − 1 ≤ rows.len`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vnni")]
+unsafe fn stem_tile<const T: usize>(
+    q: &Int8Stem,
+    rows: &Rows,
+    c0: usize,
+    reach: &[(usize, usize, u64)],
+    sums: &mut [std::arch::x86_64::__m512i; 12],
+) {
+    use std::arch::x86_64::*;
+    const { assert!(T <= 12) };
+    debug_assert!(c0 + T + K - 1 <= rows.len);
+    let tile = ((1u64 << T) - 1) << c0;
+    let mut acc = [_mm512_setzero_si512(); T];
+    let mut offset = _mm512_setzero_si512();
+    // rows with no occupied cube near this tile add only zeros
+    for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & tile != 0) {
+        // SAFETY: `(tap_row + 1)·WINDOW·CO ≤ q.w.len()` and `(tap_row +
+        // 1)·CO ≤ q.offset.len()` (one (kd, kh)); cube c0 + o's window
+        // reads bytes 3·(x0 + c0 + o) .. + 16 ≤ 3·(x0 + len) + SLACK, inside
+        // `rows.bytes` (`c0 + T + K − 1 ≤ len`).
+        unsafe {
+            let w = q.w.as_ptr().add(tap_row * WINDOW * CO);
+            let wv: [__m512i; WINDOW / 4] =
+                std::array::from_fn(|g| _mm512_loadu_si512(w.add(g * CO * 4).cast()));
+            offset = _mm512_add_epi32(
+                offset,
+                _mm512_loadu_si512(q.offset.as_ptr().add(tap_row * CO).cast()),
+            );
+            let x = rows.bytes.as_ptr().add(CIN * (x0 + c0));
+            for (o, a) in acc.iter_mut().enumerate() {
+                for (g, &w) in wv.iter().enumerate() {
+                    let v = x.add(CIN * o + 4 * g).cast::<i32>().read_unaligned();
+                    *a = _mm512_dpbusd_epi32(*a, _mm512_set1_epi32(v), w);
+                }
+            }
         }
-    };
-    for_each_block(rows, [n, p, m], out, background, near, block);
+    }
+    for (s, a) in sums.iter_mut().zip(acc) {
+        *s = _mm512_sub_epi32(a, offset);
+    }
 }
 
 #[cfg(test)]
@@ -529,7 +662,7 @@ mod tests {
             let mut rounded = c.clone();
             for (r, w) in rounded.w.iter_mut().enumerate() {
                 let (tap, ci, co) = (r / (CIN * CO), r / CO % CIN, r % CO);
-                *w = f32::from(q.w[(tap * CO + co) * 4 + ci]) * q.scale[co];
+                *w = f32::from(q.weight(tap, ci, co)) * q.scale[co];
             }
             let mut rounded_occ = Occupied {
                 index: occ.index.clone(),

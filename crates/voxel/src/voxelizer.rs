@@ -68,6 +68,8 @@ pub struct Scratch {
     /// per cube, channels-last: the sum of the normals of the faces that
     /// overlap it (zero again once the face is written out)
     sums: Vec<[f32; 3]>,
+    /// a bit per cube, zero between faces
+    bits: Vec<u64>,
     touched: Vec<u32>,
     occupied: usize,
     candidates: usize,
@@ -270,18 +272,27 @@ impl Voxelizer {
         out: &mut SparseGrid,
     ) -> Frame {
         let frame = self.accumulate(scratch, f, yaw);
-        scratch.touched.sort_unstable();
         out.cells.clear();
         out.values.clear();
+        // the touched cubes in ascending order: a bit set over the grid
+        // (a bit per cube: no sort, and only the words touched are visited)
+        let bits = &mut scratch.bits;
+        bits.resize(scratch.counts.len().div_ceil(64), 0);
         for &cell in &scratch.touched {
-            let c = cell as usize;
-            let count = std::mem::replace(&mut scratch.counts[c], 0);
-            let sum = std::mem::replace(&mut scratch.sums[c], [0.0; 3]);
-            let s = 1.0 / count as f32;
-            let v = sum.map(|v| v * s);
-            if v.iter().any(|&v| v != 0.0) {
-                out.cells.push(cell);
-                out.values.extend_from_slice(&v);
+            bits[cell as usize / 64] |= 1 << (cell % 64);
+        }
+        for (w, word) in bits.iter_mut().enumerate() {
+            while *word != 0 {
+                let c = 64 * w + word.trailing_zeros() as usize;
+                *word &= *word - 1;
+                let count = std::mem::replace(&mut scratch.counts[c], 0);
+                let sum = std::mem::replace(&mut scratch.sums[c], [0.0; 3]);
+                let s = 1.0 / count as f32;
+                let v = sum.map(|v| v * s);
+                if v.iter().any(|&v| v != 0.0) {
+                    out.cells.push(c as u32);
+                    out.values.extend_from_slice(&v);
+                }
             }
         }
         frame
