@@ -435,21 +435,7 @@ pub(crate) unsafe fn run_int8(
         near.clear();
         near.resize(m * m * m, false);
     }
-    let tiles: [StemTile; 12] = [
-        stem_tile::<1>,
-        stem_tile::<2>,
-        stem_tile::<3>,
-        stem_tile::<4>,
-        stem_tile::<5>,
-        stem_tile::<6>,
-        stem_tile::<7>,
-        stem_tile::<8>,
-        stem_tile::<9>,
-        stem_tile::<10>,
-        stem_tile::<11>,
-        stem_tile::<12>,
-    ];
-    let mut sums = [_mm512_setzero_si512(); 12];
+    let finish = Finish { scale, bias, floor };
     let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
     for od in 0..m {
         for oh in 0..m {
@@ -482,20 +468,24 @@ pub(crate) unsafe fn run_int8(
             let mut c0 = lo;
             while c0 < hi {
                 // equal tiles of at most 12 cubes
-                let parts = (hi - c0).div_ceil(tiles.len());
+                let parts = (hi - c0).div_ceil(12);
                 let t = (hi - c0).div_ceil(parts);
-                // SAFETY: the caller checked the features; `stem_tile`'s
-                // reads stay inside `rows.bytes` (checked above: rows of
-                // `len ≥ m + K − 1` cubes, SLACK bytes after the last).
-                unsafe { tiles[t - 1](q, rows, c0, &reach, &mut sums) };
-                for (o, &sum) in sums[..t].iter().enumerate() {
-                    let v =
-                        _mm512_max_ps(_mm512_fmadd_ps(_mm512_cvtepi32_ps(sum), scale, bias), floor);
-                    largest = _mm512_max_ps(largest, v);
-                    let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
-                    // SAFETY: `cube` holds 16 floats.
-                    unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), v) };
+                let cubes = &mut dst[c0 * CO..(c0 + t) * CO];
+                macro_rules! tile {
+                    ($($t:literal)*) => {
+                        match t {
+                            // SAFETY: the caller checked the features;
+                            // `stem_tile`'s reads stay inside `rows.bytes`
+                            // (checked above: rows of `len ≥ m + K − 1`
+                            // cubes, SLACK bytes after the last).
+                            $($t => unsafe {
+                                stem_tile::<$t>(q, rows, c0, &reach, &finish, cubes, &mut largest)
+                            },)*
+                            _ => unreachable!("tiles of 1 to 12 cubes"),
+                        }
+                    };
                 }
+                tile!(1 2 3 4 5 6 7 8 9 10 11 12);
                 c0 += t;
             }
         }
@@ -507,23 +497,21 @@ pub(crate) unsafe fn run_int8(
     }
 }
 
-/// Writes the i32 sums (offset removed) of `t` output cubes into `sums[..t]`
-/// (the function at index `t − 1`).
+/// The int8 stem's last steps for a cube: its i32 sum (offset removed) to
+/// f32 times the scale, plus the bias, then the ReLU's floor.
 #[cfg(target_arch = "x86_64")]
-type StemTile = unsafe fn(
-    &Int8Stem,
-    &Rows,
-    usize,
-    &[(usize, usize, u64)],
-    &mut [std::arch::x86_64::__m512i; 12],
-);
+struct Finish {
+    scale: std::arch::x86_64::__m512,
+    bias: std::arch::x86_64::__m512,
+    floor: std::arch::x86_64::__m512,
+}
 
-/// The int8 stem's sums for output cubes `c0 .. c0 + T` of one output row
-/// from its reaching rows `reach` (those with an occupied cube near the
-/// tile): per row, the four weight vectors of its (kd, kh) in registers,
-/// and for each cube its W window of 15 packed bytes (and one more, whose
-/// weight is zero) as four broadcast i32 — four `vpdpbusd` per cube and
-/// row, `T` chains in flight.
+/// The int8 stem's output cubes `c0 .. c0 + T` of one output row into
+/// `out` (`T` cubes) from its reaching rows `reach` (those with an occupied
+/// cube near the tile), and their maximum into `largest`: per row, the four
+/// weight vectors of its (kd, kh) in registers, and for each cube its W
+/// window of 15 packed bytes (and one more, whose weight is zero) as four
+/// broadcast i32 — four `vpdpbusd` per cube and row, `T` chains in flight.
 ///
 /// # Safety
 /// The CPU has AVX-512 F, BW and VNNI; `rows` is quantized, and `c0 + T +
@@ -535,11 +523,13 @@ unsafe fn stem_tile<const T: usize>(
     rows: &Rows,
     c0: usize,
     reach: &[(usize, usize, u64)],
-    sums: &mut [std::arch::x86_64::__m512i; 12],
+    finish: &Finish,
+    out: &mut [f32],
+    largest: &mut std::arch::x86_64::__m512,
 ) {
     use std::arch::x86_64::*;
     const { assert!(T <= 12) };
-    debug_assert!(c0 + T + K - 1 <= rows.len);
+    debug_assert!(c0 + T + K - 1 <= rows.len && out.len() == T * CO);
     let tile = ((1u64 << T) - 1) << c0;
     let mut acc = [_mm512_setzero_si512(); T];
     let mut offset = _mm512_setzero_si512();
@@ -566,9 +556,18 @@ unsafe fn stem_tile<const T: usize>(
             }
         }
     }
-    for (s, a) in sums.iter_mut().zip(acc) {
-        *s = _mm512_sub_epi32(a, offset);
+    let mut top = *largest;
+    for (a, cube) in acc.into_iter().zip(out.chunks_exact_mut(CO)) {
+        let sum = _mm512_cvtepi32_ps(_mm512_sub_epi32(a, offset));
+        let v = _mm512_max_ps(
+            _mm512_fmadd_ps(sum, finish.scale, finish.bias),
+            finish.floor,
+        );
+        top = _mm512_max_ps(top, v);
+        // SAFETY: `cube` holds 16 floats.
+        unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), v) };
     }
+    *largest = top;
 }
 
 #[cfg(test)]
