@@ -268,3 +268,26 @@ fn sparse_inputs_give_the_dense_outputs_and_bad_ones_are_named() {
     cnn.forward_sparse(&[(&[], &[])], &mut out).unwrap();
     assert!(out.iter().all(|v| v.is_finite()));
 }
+
+#[test]
+fn a_sample_gives_the_same_outputs_in_any_batch() {
+    // more samples than one register block of the head (8) and not a
+    // multiple of it, so blocked and plain head paths both run
+    let (grid, batch) = (21, 19);
+    let w = common::random_net(9, grid, [16, 32, 64]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(950 + i as u64, grid))
+        .collect();
+    for precision in [Precision::F32, Precision::Int8] {
+        cnn.set_precision(precision);
+        let mut all = vec![0.0f32; batch * 18];
+        cnn.forward(&grids, &mut all).unwrap();
+        for (b, grid) in grids.chunks_exact(cnn.grid_len()).enumerate() {
+            let mut one = vec![0.0f32; 18];
+            cnn.forward(grid, &mut one).unwrap();
+            // == : the same values (an exact zero may differ in sign)
+            assert_eq!(one, all[b * 18..(b + 1) * 18], "{precision:?} sample {b}");
+        }
+    }
+}
