@@ -591,11 +591,13 @@ impl Cnn {
         match self.row_stem {
             #[cfg(target_arch = "x86_64")]
             true => {
-                s.rows.build(&s.occupied, self.grid, self.stem.pad, n);
+                let int8 = matches!(&self.stem_int8, Some(_) if self.runs_int8_stem());
+                s.rows
+                    .build(&s.occupied, [self.grid, self.stem.pad, n], !int8);
                 let near = sparse.then_some(&mut s.near);
                 match &self.stem_int8 {
                     Some(q) if self.runs_int8_stem() => {
-                        let scale = s.rows.quantize();
+                        let scale = s.rows.quantize(&s.occupied);
                         let (p, g) = (self.stem.pad, self.grid);
                         // SAFETY: int8 precision means `conv_int8::supported()`
                         // (F, BW, VNNI); `set_row_stem` checked `serves`.

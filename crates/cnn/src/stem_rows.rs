@@ -52,8 +52,9 @@ pub(crate) struct Rows {
 
 impl Rows {
     /// Lays out `occupied` (cubes of an `n³` grid) for a stem with padding
-    /// `pad` and output side `m`.
-    pub(crate) fn build(&mut self, occupied: &Occupied, n: usize, pad: usize, m: usize) {
+    /// `pad` and output side `m`; the f32 values (for [`run`]) only with
+    /// `values` ([`run_int8`] needs only [`Rows::quantize`]'s bytes).
+    pub(crate) fn build(&mut self, occupied: &Occupied, [n, pad, m]: [usize; 3], values: bool) {
         self.len = m.div_ceil(CHUNK) * CHUNK + K - 1;
         debug_assert!(n + pad <= self.len);
         self.slot.clear();
@@ -70,7 +71,9 @@ impl Rows {
             }
         }
         self.values.clear();
-        self.values.resize(used as usize * self.len * CIN, 0.0);
+        if values {
+            self.values.resize(used as usize * self.len * CIN, 0.0);
+        }
         self.reaches.clear();
         self.reaches.resize(used as usize, 0);
         self.cubes.clear();
@@ -81,45 +84,38 @@ impl Rows {
             self.reaches[self.slot[row] as usize] |= outputs & output_bits(m);
             let at = self.slot[row] as usize * self.len + w + pad;
             self.cubes.push(at as u32);
-            let at = at * CIN;
-            self.values[at..at + CIN]
-                .copy_from_slice(&occupied.values[cube * CIN..cube * CIN + CIN]);
+            if values {
+                let at = at * CIN;
+                self.values[at..at + CIN]
+                    .copy_from_slice(&occupied.values[cube * CIN..cube * CIN + CIN]);
+            }
         }
     }
 
-    /// The rows in bytes for [`run_int8`]; returns the scale s (value ≈
-    /// (byte − 128) · s, s = largest |value| / 127, 1 for an all-zero grid).
-    pub(crate) fn quantize(&mut self) -> f32 {
-        let max = self
-            .values
-            .chunks_exact(16)
-            .fold([0.0f32; 16], |mut m, c| {
-                for (m, v) in m.iter_mut().zip(c) {
-                    *m = m.max(v.abs());
-                }
-                m
-            })
-            .into_iter()
-            .chain(
-                self.values
-                    .chunks_exact(16)
-                    .remainder()
-                    .iter()
-                    .map(|v| v.abs()),
-            )
-            .fold(0.0f32, f32::max);
+    /// Bytes of the rows in [`run_int8`]'s layout, without the slack.
+    fn row_bytes(&self) -> usize {
+        self.reaches.len() * self.len * CIN
+    }
+
+    /// The rows in bytes for [`run_int8`], from the `occupied` cubes
+    /// [`Rows::build`] laid out; returns the scale s (value ≈ (byte − 128) ·
+    /// s, s = largest |value| / 127, 1 for an all-zero grid).
+    pub(crate) fn quantize(&mut self, occupied: &Occupied) -> f32 {
+        assert_eq!(
+            occupied.index.len(),
+            self.cubes.len(),
+            "rows built from these cubes"
+        );
+        let max = occupied.values.iter().fold(0.0f32, |m, v| m.max(v.abs()));
         let scale = if max > 0.0 { max / 127.0 } else { 1.0 };
         let inv = 1.0 / scale;
         let byte = |v: f32| round_half_even(v * inv).clamp(-127, 127) + 128;
         // every cube 128 (zero) but the occupied ones
         self.bytes.clear();
-        self.bytes.resize(self.values.len() + SLACK, 128);
-        for &cube in &self.cubes {
-            let at = cube as usize * CIN;
-            for (b, &v) in self.bytes[at..at + CIN]
-                .iter_mut()
-                .zip(&self.values[at..at + CIN])
-            {
+        self.bytes.resize(self.row_bytes() + SLACK, 128);
+        for (&at, values) in self.cubes.iter().zip(occupied.values.chunks_exact(CIN)) {
+            let at = at as usize * CIN;
+            for (b, &v) in self.bytes[at..at + CIN].iter_mut().zip(values) {
                 *b = byte(v) as u8;
             }
         }
@@ -416,7 +412,7 @@ pub(crate) unsafe fn run_int8(
     assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
     assert!(rows.len >= m + K - 1);
     assert!(
-        rows.bytes.len() == rows.values.len() + SLACK,
+        rows.bytes.len() == rows.row_bytes() + SLACK,
         "rows not quantized"
     );
     // SAFETY: 16 output channels: 16 biases and scales.
@@ -609,7 +605,7 @@ mod tests {
         occ.gather(&grid, 3);
         let m = c.output_side(n);
         let mut rows = Rows::default();
-        rows.build(&occ, n, c.pad, m);
+        rows.build(&occ, [n, c.pad, m], true);
         (c, occ, rows, m)
     }
 
@@ -655,7 +651,7 @@ mod tests {
         }
         for n in SIDES {
             let (c, occ, mut rows, m) = stem_and_grid(n);
-            let s = rows.quantize();
+            let s = rows.quantize(&occ);
             let q = Int8Stem::new(&c).expect("a 3 → 16 stem");
             // the values the bytes stand for
             let mut rounded = c.clone();
@@ -671,7 +667,7 @@ mod tests {
                 *v = (*v / s).round() * s;
             }
             let mut rounded_rows = Rows::default();
-            rounded_rows.build(&rounded_occ, n, c.pad, m);
+            rounded_rows.build(&rounded_occ, [n, c.pad, m], true);
             for relu in [false, true] {
                 let mut want = vec![f32::NAN; m * m * m * 16];
                 let mut exact = vec![f32::NAN; m * m * m * 16];
