@@ -29,6 +29,15 @@ fn forward(c: &mut Criterion) {
             g.bench_function(format!("batch{batch}_int8"), |b| {
                 b.iter(|| cnn.forward(&grids, &mut out).unwrap())
             });
+            // what denoising runs: int8 stem too, grids handed over sparse
+            if cnn.set_int8_stem(true) {
+                let sparse = common::sparse_grids(&grids, cnn.grid_len());
+                let samples: Vec<(&[u32], &[f32])> =
+                    sparse.iter().map(|(i, v)| (&i[..], &v[..])).collect();
+                g.bench_function(format!("batch{batch}_int8_stem_sparse"), |b| {
+                    b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
+                });
+            }
         }
         g.finish();
     }

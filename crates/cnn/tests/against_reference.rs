@@ -219,21 +219,6 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
     assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
 }
 
-/// The occupied cubes of a dense `[3, D, H, W]` grid as (indices, values
-/// channels-last).
-fn sparse_of(grid: &[f32]) -> (Vec<u32>, Vec<f32>) {
-    let cubes = grid.len() / 3;
-    let index: Vec<u32> = (0..cubes)
-        .filter(|&i| (0..3).any(|c| grid[c * cubes + i] != 0.0))
-        .map(|i| i as u32)
-        .collect();
-    let values = index
-        .iter()
-        .flat_map(|&i| (0..3).map(move |c| grid[c * cubes + i as usize]))
-        .collect();
-    (index, values)
-}
-
 #[test]
 fn sparse_inputs_give_the_dense_outputs_and_bad_ones_are_named() {
     let (grid, batch) = (21, 10);
@@ -242,8 +227,7 @@ fn sparse_inputs_give_the_dense_outputs_and_bad_ones_are_named() {
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(900 + i as u64, grid))
         .collect();
-    let sparse: Vec<(Vec<u32>, Vec<f32>)> =
-        grids.chunks_exact(cnn.grid_len()).map(sparse_of).collect();
+    let sparse = common::sparse_grids(&grids, cnn.grid_len());
     let samples: Vec<(&[u32], &[f32])> = sparse.iter().map(|(i, v)| (&i[..], &v[..])).collect();
     // every arithmetic this CPU has: the same bits either way
     for precision in [Precision::F32, Precision::Int8] {

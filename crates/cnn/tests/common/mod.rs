@@ -236,3 +236,23 @@ pub fn reference_forward(w: &NetWeights, grid: &[f32]) -> Vec<f64> {
         .map(f64::tanh)
         .collect()
 }
+
+/// The occupied cubes of each dense `[3, D, H, W]` grid of `grids` (each
+/// `grid_len` values) as (indices, values channels-last).
+pub fn sparse_grids(grids: &[f32], grid_len: usize) -> Vec<(Vec<u32>, Vec<f32>)> {
+    grids
+        .chunks_exact(grid_len)
+        .map(|grid| {
+            let cubes = grid.len() / 3;
+            let index: Vec<u32> = (0..cubes)
+                .filter(|&i| (0..3).any(|c| grid[c * cubes + i] != 0.0))
+                .map(|i| i as u32)
+                .collect();
+            let values = index
+                .iter()
+                .flat_map(|&i| (0..3).map(move |c| grid[c * cubes + i as usize]))
+                .collect();
+            (index, values)
+        })
+        .collect()
+}
