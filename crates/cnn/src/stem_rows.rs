@@ -249,27 +249,28 @@ fn reaching_rows(
 }
 
 /// The row loops both stems share: for every output row (od, oh) the input
-/// rows that reach it; an output row no input row reaches gets `background`
-/// in every cube; otherwise `block(c0, chunk, reach, dst)` computes output
-/// cubes `c0..c0 + CHUNK` (bits `chunk`) of the row `dst` from `reach`.
-/// With `near`, also the output cubes whose window holds an occupied cube.
-/// Returns whether any row got the background.
+/// rows that reach it and the span `lo..hi` of the output cubes they reach;
+/// every cube outside the span (a row no input row reaches: all its cubes)
+/// gets `background` (its sums are zero), and `span(lo, hi, reach, dst)`
+/// computes cubes `lo..hi` of the row `dst`. With `near`, also the output
+/// cubes whose window holds an occupied cube. Returns whether any cube got
+/// the background.
 #[inline(always)]
-fn for_each_block(
+fn for_each_span(
     rows: &Rows,
     [n, p, m]: [usize; 3],
     out: &mut [f32],
     background: [f32; CO],
     mut near: Option<&mut Vec<bool>>,
-    mut block: impl FnMut(usize, u64, &[(usize, usize, u64)], &mut [f32]),
+    mut span: impl FnMut(usize, usize, &[(usize, usize, u64)], &mut [f32]),
 ) -> bool {
-    let mut any_background = false;
     assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
     assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
     if let Some(near) = near.as_deref_mut() {
         near.clear();
         near.resize(m * m * m, false);
     }
+    let mut any_background = false;
     // (first cube of the input row, its (kd, kh) tap row, the output cubes
     // it reaches)
     let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
@@ -278,11 +279,20 @@ fn for_each_block(
             let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
             let first = (od * m + oh) * m;
             let dst = &mut out[first * CO..(first + m) * CO];
-            if reach.is_empty() {
-                for cube in dst.chunks_exact_mut(CO) {
+            let (lo, hi) = match reached {
+                0 => (0, 0),
+                r => (r.trailing_zeros() as usize, 64 - r.leading_zeros() as usize),
+            };
+            if hi - lo < m {
+                any_background = true;
+                for cube in dst[..lo * CO].chunks_exact_mut(CO) {
                     cube.copy_from_slice(&background);
                 }
-                any_background = true;
+                for cube in dst[hi * CO..].chunks_exact_mut(CO) {
+                    cube.copy_from_slice(&background);
+                }
+            }
+            if reached == 0 {
                 continue;
             }
             if let Some(near) = near.as_deref_mut() {
@@ -290,9 +300,7 @@ fn for_each_block(
                     *flag = reached >> ow & 1 == 1;
                 }
             }
-            for c0 in (0..m).step_by(CHUNK) {
-                block(c0, ((1u64 << CHUNK) - 1) << c0, &reach, dst);
-            }
+            span(lo, hi, &reach, dst);
         }
     }
     any_background
@@ -341,7 +349,11 @@ pub(crate) unsafe fn run(
     // SAFETY: `serves` means 16 output channels, so 16 biases.
     let bias = unsafe { _mm512_loadu_ps(c.b.as_ptr()) };
     let (floor, background) = floor_and_background(bias, relu);
-    let block = |c0: usize, chunk: u64, reach: &[(usize, usize, u64)], dst: &mut [f32]| {
+    let block = |c0: usize,
+                 chunk: u64,
+                 [lo, hi]: [usize; 2],
+                 reach: &[(usize, usize, u64)],
+                 dst: &mut [f32]| {
         let mut acc = [bias; CHUNK];
         // rows with no occupied cube near this block add only zeros
         for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & chunk != 0) {
@@ -373,13 +385,22 @@ pub(crate) unsafe fn run(
                 input!(0 1 2 3 4 5 6 7 8 9 10);
             }
         }
-        for (o, a) in acc.iter().enumerate().take(m - c0) {
-            let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
-            // SAFETY: `cube` holds 16 floats.
-            unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), _mm512_max_ps(*a, floor)) };
+        for (o, a) in acc.iter().enumerate() {
+            if (lo..hi).contains(&(c0 + o)) {
+                let cube = &mut dst[(c0 + o) * CO..(c0 + o + 1) * CO];
+                // SAFETY: `cube` holds 16 floats.
+                unsafe { _mm512_storeu_ps(cube.as_mut_ptr(), _mm512_max_ps(*a, floor)) };
+            }
         }
     };
-    for_each_block(rows, [n, p, m], out, background, near, block);
+    // blocks of CHUNK cubes aligned to CHUNK (the rows hold whole blocks),
+    // their cubes in lo..hi stored
+    let span = |lo: usize, hi: usize, reach: &[(usize, usize, u64)], dst: &mut [f32]| {
+        for c0 in (lo / CHUNK * CHUNK..hi).step_by(CHUNK) {
+            block(c0, ((1u64 << CHUNK) - 1) << c0, [lo, hi], reach, dst);
+        }
+    };
+    for_each_span(rows, [n, p, m], out, background, near, span);
 }
 
 /// As [`run`] with the stem's multiply-adds in 8-bit integers (AVX-512
@@ -405,11 +426,10 @@ pub(crate) unsafe fn run_int8(
     n: usize,
     out: &mut [f32],
     relu: bool,
-    mut near: Option<&mut Vec<bool>>,
+    near: Option<&mut Vec<bool>>,
 ) -> f32 {
     use std::arch::x86_64::*;
     let m = crate::conv::output_side(n, K, 1, p);
-    assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
     assert!(rows.len >= m + K - 1);
     assert!(
         rows.bytes.len() == rows.row_bytes() + SLACK,
@@ -424,68 +444,35 @@ pub(crate) unsafe fn run_int8(
         )
     };
     let (floor, background) = floor_and_background(bias, relu);
-    let mut any_background = false;
     // the largest output, for the next layer's quantization
     let mut largest = _mm512_set1_ps(f32::NEG_INFINITY);
-    if let Some(near) = near.as_deref_mut() {
-        near.clear();
-        near.resize(m * m * m, false);
-    }
     let finish = Finish { scale, bias, floor };
-    let mut reach: Vec<(usize, usize, u64)> = Vec::with_capacity(K * K);
-    for od in 0..m {
-        for oh in 0..m {
-            let reached = reaching_rows(rows, n, p, (od, oh), &mut reach);
-            let first = (od * m + oh) * m;
-            let dst = &mut out[first * CO..(first + m) * CO];
-            // the reached cubes lie in lo..hi (none: lo = hi = 0); the
-            // others sum to zero and take the background
-            let (lo, hi) = match reached {
-                0 => (0, 0),
-                r => (r.trailing_zeros() as usize, 64 - r.leading_zeros() as usize),
-            };
-            if hi - lo < m {
-                any_background = true;
+    let span = |lo: usize, hi: usize, reach: &[(usize, usize, u64)], dst: &mut [f32]| {
+        let mut c0 = lo;
+        while c0 < hi {
+            // equal tiles of at most 12 cubes
+            let parts = (hi - c0).div_ceil(12);
+            let t = (hi - c0).div_ceil(parts);
+            let cubes = &mut dst[c0 * CO..(c0 + t) * CO];
+            macro_rules! tile {
+                ($($t:literal)*) => {
+                    match t {
+                        // SAFETY: the caller checked the features;
+                        // `stem_tile`'s reads stay inside `rows.bytes`
+                        // (checked above: rows of `len ≥ m + K − 1` cubes,
+                        // SLACK bytes after the last).
+                        $($t => unsafe {
+                            stem_tile::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
+                        },)*
+                        _ => unreachable!("tiles of 1 to 12 cubes"),
+                    }
+                };
             }
-            for cube in dst[..lo * CO].chunks_exact_mut(CO) {
-                cube.copy_from_slice(&background);
-            }
-            for cube in dst[hi * CO..].chunks_exact_mut(CO) {
-                cube.copy_from_slice(&background);
-            }
-            if reached == 0 {
-                continue;
-            }
-            if let Some(near) = near.as_deref_mut() {
-                for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
-                    *flag = reached >> ow & 1 == 1;
-                }
-            }
-            let mut c0 = lo;
-            while c0 < hi {
-                // equal tiles of at most 12 cubes
-                let parts = (hi - c0).div_ceil(12);
-                let t = (hi - c0).div_ceil(parts);
-                let cubes = &mut dst[c0 * CO..(c0 + t) * CO];
-                macro_rules! tile {
-                    ($($t:literal)*) => {
-                        match t {
-                            // SAFETY: the caller checked the features;
-                            // `stem_tile`'s reads stay inside `rows.bytes`
-                            // (checked above: rows of `len ≥ m + K − 1`
-                            // cubes, SLACK bytes after the last).
-                            $($t => unsafe {
-                                stem_tile::<$t>(q, rows, c0, &reach, &finish, cubes, &mut largest)
-                            },)*
-                            _ => unreachable!("tiles of 1 to 12 cubes"),
-                        }
-                    };
-                }
-                tile!(1 2 3 4 5 6 7 8 9 10 11 12);
-                c0 += t;
-            }
+            tile!(1 2 3 4 5 6 7 8 9 10 11 12);
+            c0 += t;
         }
-    }
+    };
+    let any_background = for_each_span(rows, [n, p, m], out, background, near, span);
     let computed = _mm512_reduce_max_ps(largest);
     match any_background {
         true => background.into_iter().fold(computed, f32::max),
