@@ -300,10 +300,18 @@ unsafe fn pointwise_avx512<const B: usize>(
     } else {
         _mm512_set1_ps(f32::NEG_INFINITY)
     };
+    assert!(m <= 64);
+    // a few cubes at a time, so that each has its own accumulators: with 16
+    // or 32 outputs one cube's sum alone is a chain of `cin` dependent FMAs
+    // (the same sums in the same order either way)
+    let group = if B <= 4 { 4 } else { 1 };
+    let mut cubes = [0usize; 64];
     for od in 0..m {
         for oh in 0..m {
+            let first = (od * m + oh) * m;
+            let mut count = 0;
             for ow in 0..m {
-                let o = (od * m + oh) * m + ow;
+                let o = first + ow;
                 if let Some(r) = region
                     && !r.mask[o]
                 {
@@ -312,32 +320,92 @@ unsafe fn pointwise_avx512<const B: usize>(
                     }
                     continue;
                 }
-                let i = ((od * s) * n + oh * s) * n + ow * s;
-                // SAFETY: `i < n³` (asserted `(m − 1)·s < n`), so `cin`
-                // inputs from `i·cin`; `B·16 = co` weights per input
-                // channel and outputs from `o·co`, all within the asserted
-                // lengths.
-                unsafe {
-                    let x = input.as_ptr().add(i * cin);
-                    let dst = out.as_mut_ptr().add(o * co);
-                    let mut acc = [_mm512_setzero_ps(); B];
-                    for (b, a) in acc.iter_mut().enumerate() {
-                        *a = _mm512_loadu_ps(c.b.as_ptr().add(16 * b));
-                        if accumulate {
-                            *a = _mm512_add_ps(*a, _mm512_loadu_ps(dst.add(16 * b)));
+                cubes[count] = ow;
+                count += 1;
+            }
+            for ows in cubes[..count].chunks(group) {
+                // (input cube, output cube) of each
+                let at = |j: usize| (((od * s) * n + oh * s) * n + ows[j] * s, first + ows[j]);
+                macro_rules! go {
+                    ($g:literal) => {
+                        // SAFETY: input cubes `< n³` (asserted `(m − 1)·s <
+                        // n`), output cubes `< m³`, within the asserted
+                        // lengths; the caller checked AVX-512F.
+                        unsafe {
+                            pointwise_cubes::<B, $g>(
+                                c,
+                                input,
+                                out,
+                                std::array::from_fn(at),
+                                accumulate,
+                                floor,
+                            )
                         }
-                    }
-                    for ci in 0..cin {
-                        let v = _mm512_set1_ps(*x.add(ci));
-                        let w = c.w.as_ptr().add(ci * co);
-                        for (b, a) in acc.iter_mut().enumerate() {
-                            *a = _mm512_fmadd_ps(v, _mm512_loadu_ps(w.add(16 * b)), *a);
-                        }
-                    }
-                    for (b, a) in acc.iter().enumerate() {
-                        _mm512_storeu_ps(dst.add(16 * b), _mm512_max_ps(*a, floor));
-                    }
+                    };
                 }
+                match ows.len() {
+                    4 => go!(4),
+                    3 => go!(3),
+                    2 => go!(2),
+                    _ => go!(1),
+                }
+            }
+        }
+    }
+}
+
+/// [`pointwise_avx512`]'s sums for `G` cubes `(input cube, output cube)`,
+/// each with its own `B` accumulators: `out = [relu](bias [+ out] + Σ_ci
+/// x_ci · w_ci)`, summed over ci in order.
+///
+/// # Safety
+/// The CPU must have AVX-512F; every input cube `< input.len() / cin`, every
+/// output cube `< out.len() / co`; `co == 16·B`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn pointwise_cubes<const B: usize, const G: usize>(
+    c: &FoldedConv,
+    input: &[f32],
+    out: &mut [f32],
+    at: [(usize, usize); G],
+    accumulate: bool,
+    floor: std::arch::x86_64::__m512,
+) {
+    use std::arch::x86_64::*;
+    let (cin, co) = (c.cin, c.cout);
+    debug_assert!(
+        at.iter()
+            .all(|&(i, o)| (i + 1) * cin <= input.len() && (o + 1) * co <= out.len())
+    );
+    // SAFETY (all loads and stores): as the caller promised, `cin` inputs
+    // from `i·cin` and `co` outputs from `o·co`; `co` weights per input
+    // channel, `co` biases.
+    unsafe {
+        let x: [*const f32; G] = at.map(|(i, _)| input.as_ptr().add(i * cin));
+        let dst: [*mut f32; G] = at.map(|(_, o)| out.as_mut_ptr().add(o * co));
+        let mut acc = [[_mm512_setzero_ps(); B]; G];
+        for (a, d) in acc.iter_mut().zip(dst) {
+            for (b, a) in a.iter_mut().enumerate() {
+                *a = _mm512_loadu_ps(c.b.as_ptr().add(16 * b));
+                if accumulate {
+                    *a = _mm512_add_ps(*a, _mm512_loadu_ps(d.add(16 * b)));
+                }
+            }
+        }
+        for ci in 0..cin {
+            let w = c.w.as_ptr().add(ci * co);
+            let wv: [__m512; B] = std::array::from_fn(|b| _mm512_loadu_ps(w.add(16 * b)));
+            for (a, x) in acc.iter_mut().zip(x) {
+                let v = _mm512_set1_ps(*x.add(ci));
+                for (a, &w) in a.iter_mut().zip(&wv) {
+                    *a = _mm512_fmadd_ps(v, w, *a);
+                }
+            }
+        }
+        for (a, d) in acc.iter().zip(dst) {
+            for (b, a) in a.iter().enumerate() {
+                _mm512_storeu_ps(d.add(16 * b), _mm512_max_ps(*a, floor));
             }
         }
     }
