@@ -591,7 +591,7 @@ impl Cnn {
         match self.row_stem {
             #[cfg(target_arch = "x86_64")]
             true => {
-                let int8 = matches!(&self.stem_int8, Some(_) if self.runs_int8_stem());
+                let int8 = self.runs_int8_stem();
                 s.rows
                     .build(&s.occupied, [self.grid, self.stem.pad, n], !int8);
                 let near = sparse.then_some(&mut s.near);
