@@ -12,10 +12,14 @@
 //! value: on real grids (a noisy validation box, first iteration) a row holds
 //! 5.9 occupied cubes of 21 and the blocks do 2.4× the scatter's
 //! multiply-adds, at register speed: 1.26× faster than scatter + mask there,
-//! 2.4× on the flat synthetic sheets of the layer benchmark.
+//! 2.4× on the flat synthetic sheets of the layer benchmark. In an output
+//! row, only the span of cubes its input rows' occupied cubes reach is
+//! computed; the cubes outside it sum to zero and take the background.
 //!
 //! The result equals the scatter's up to f32 rounding (another summation
-//! order); a test checks it.
+//! order); a test checks it. The int8 version ([`run_int8`]) reads each
+//! output cube's W window as 15 packed bytes (four `vpdpbusd` per cube and
+//! input row) in tiles of up to 12 cubes over that span.
 
 use crate::conv::FoldedConv;
 use crate::sparse_conv::Occupied;
