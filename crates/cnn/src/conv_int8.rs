@@ -279,6 +279,12 @@ fn bytes_avx512(x: &[f32], inv: f32, out: &mut [u8]) {
     bytes_scalar(tail, inv, outs.into_remainder());
 }
 
+/// The length of the next tile over `left` cubes, tiles of at most `max`:
+/// as equal as they can be (13 cubes by at most 12: 7, then 6).
+pub(crate) fn tile_len(left: usize, max: usize) -> usize {
+    left.div_ceil(left.div_ceil(max))
+}
+
 /// Computes the i32 sums of `t` neighbouring output cubes of one W row into
 /// `sums[..t]` (the function at index `t − 1` of the table).
 #[cfg(target_arch = "x86_64")]
@@ -353,9 +359,7 @@ fn dense_vnni<const V: usize>(
             (first + hi..first + m).for_each(|o| background(o, out));
             let mut ow = lo;
             while ow < hi {
-                // equal tiles, as long as the table allows
-                let parts = (hi - ow).div_ceil(tiles.len());
-                let t = (hi - ow).div_ceil(parts);
+                let t = tile_len(hi - ow, tiles.len());
                 // SAFETY: the caller checked the features; `tile_sums`
                 // checks its slices.
                 unsafe { tiles[t - 1](c, input, n, [od, oh, ow], &mut sums) };

@@ -596,7 +596,7 @@ impl Cnn {
                     .build(&s.occupied, [self.grid, self.stem.pad, n], !int8);
                 let near = sparse.then_some(&mut s.near);
                 match &self.stem_int8 {
-                    Some(q) if self.runs_int8_stem() => {
+                    Some(q) if int8 => {
                         let scale = s.rows.quantize(&s.occupied);
                         let (p, g) = (self.stem.pad, self.grid);
                         // SAFETY: int8 precision means `conv_int8::supported()`

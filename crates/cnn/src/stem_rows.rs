@@ -179,14 +179,13 @@ impl Int8Stem {
         let mut w = vec![0i8; K * K * WINDOW * CO];
         let mut offset = vec![0i32; K * K * CO];
         for tap in 0..K * K * K {
-            let (row, kw) = (tap / K, tap % K);
+            let row = tap / K;
             for ci in 0..CIN {
                 for co in 0..CO {
                     let q = (c.w[(tap * CIN + ci) * CO + co] / scale[co])
                         .round()
                         .clamp(-127.0, 127.0) as i8;
-                    let byte = CIN * kw + ci;
-                    w[((row * WINDOW / 4 + byte / 4) * CO + co) * 4 + byte % 4] = q;
+                    w[weight_index(tap, ci, co)] = q;
                     offset[row * CO + co] += 128 * i32::from(q);
                 }
             }
@@ -203,9 +202,16 @@ impl Int8Stem {
     /// `ci`, output channel `co`.
     #[cfg(test)]
     fn weight(&self, tap: usize, ci: usize, co: usize) -> i8 {
-        let (row, byte) = (tap / K, CIN * (tap % K) + ci);
-        self.w[((row * WINDOW / 4 + byte / 4) * CO + co) * 4 + byte % 4]
+        self.w[weight_index(tap, ci, co)]
     }
+}
+
+/// Where [`Int8Stem`]'s `w` keeps the weight of tap `(kd·K + kh)·K + kw`,
+/// input channel `ci`, output channel `co`: byte `3·kw + ci` of its (kd, kh)
+/// row's window.
+fn weight_index(tap: usize, ci: usize, co: usize) -> usize {
+    let (row, byte) = (tap / K, CIN * (tap % K) + ci);
+    ((row * WINDOW / 4 + byte / 4) * CO + co) * 4 + byte % 4
 }
 
 /// Bits `0..m` set.
@@ -454,9 +460,7 @@ pub(crate) unsafe fn run_int8(
     let span = |lo: usize, hi: usize, reach: &[(usize, usize, u64)], dst: &mut [f32]| {
         let mut c0 = lo;
         while c0 < hi {
-            // equal tiles of at most 12 cubes
-            let parts = (hi - c0).div_ceil(12);
-            let t = (hi - c0).div_ceil(parts);
+            let t = crate::conv_int8::tile_len(hi - c0, 12);
             let cubes = &mut dst[c0 * CO..(c0 + t) * CO];
             macro_rules! tile {
                 ($($t:literal)*) => {

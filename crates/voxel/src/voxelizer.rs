@@ -98,6 +98,15 @@ impl Scratch {
         self.visited
     }
 
+    /// The mean of the normals summed into `cell`, which is left empty
+    /// again (count and sum zero) for the next face.
+    fn take_mean(&mut self, cell: usize) -> [f32; 3] {
+        let count = std::mem::replace(&mut self.counts[cell], 0);
+        let sum = std::mem::replace(&mut self.sums[cell], [0.0; 3]);
+        let s = 1.0 / count as f32;
+        sum.map(|v| v * s)
+    }
+
     fn prepare(&mut self, num_faces: usize, num_cells: usize) {
         if self.stamp.len() < num_faces {
             self.stamp = vec![0; num_faces];
@@ -245,13 +254,10 @@ impl Voxelizer {
         let frame = self.accumulate(scratch, f, yaw);
         let cells = grid_len / 3;
         out.fill(0.0);
-        for &cell in &scratch.touched {
-            let cell = cell as usize;
-            let count = std::mem::replace(&mut scratch.counts[cell], 0);
-            let sum = std::mem::replace(&mut scratch.sums[cell], [0.0; 3]);
-            let s = 1.0 / count as f32;
-            for (c, v) in sum.into_iter().enumerate() {
-                out[c * cells + cell] = v * s;
+        for i in 0..scratch.touched.len() {
+            let cell = scratch.touched[i] as usize;
+            for (c, v) in scratch.take_mean(cell).into_iter().enumerate() {
+                out[c * cells + cell] = v;
             }
         }
         frame
@@ -259,8 +265,9 @@ impl Voxelizer {
 
     /// [`Self::voxelize_face_with`] into a [`SparseGrid`]: only the cubes
     /// with a non-zero channel (the same values as in the dense grid).
-    /// Time: O(candidate faces × cubes of their bounding boxes) plus
-    /// sorting the occupied cubes; nothing of size `side³` is cleared.
+    /// Time: O(candidate faces × cubes of their bounding boxes) plus a
+    /// pass over a bit per cube (the occupied cubes in ascending order);
+    /// nothing of size `side³` is cleared.
     ///
     /// # Panics
     /// If `f` is out of range.
@@ -274,9 +281,9 @@ impl Voxelizer {
         let frame = self.accumulate(scratch, f, yaw);
         out.cells.clear();
         out.values.clear();
-        // the touched cubes in ascending order: a bit set over the grid
-        // (a bit per cube: no sort, and only the words touched are visited)
-        let bits = &mut scratch.bits;
+        // the touched cubes in ascending order from a bit per cube of the
+        // grid (145 words at 21³) instead of a sort
+        let mut bits = std::mem::take(&mut scratch.bits);
         bits.resize(scratch.counts.len().div_ceil(64), 0);
         for &cell in &scratch.touched {
             bits[cell as usize / 64] |= 1 << (cell % 64);
@@ -285,16 +292,15 @@ impl Voxelizer {
             while *word != 0 {
                 let c = 64 * w + word.trailing_zeros() as usize;
                 *word &= *word - 1;
-                let count = std::mem::replace(&mut scratch.counts[c], 0);
-                let sum = std::mem::replace(&mut scratch.sums[c], [0.0; 3]);
-                let s = 1.0 / count as f32;
-                let v = sum.map(|v| v * s);
+                let v = scratch.take_mean(c);
                 if v.iter().any(|&v| v != 0.0) {
                     out.cells.push(c as u32);
                     out.values.extend_from_slice(&v);
                 }
             }
         }
+        // all zero again
+        scratch.bits = bits;
         frame
     }
 
