@@ -70,7 +70,12 @@ pub struct Scratch {
     sums: Vec<[f32; 3]>,
     /// a bit per cube, zero between faces
     bits: Vec<u64>,
-    touched: Vec<u32>,
+    /// the cubes summed into since the last face, in the order first
+    /// touched: the first `touched` entries (len `side³ + 1`)
+    touched_cells: Vec<u32>,
+    touched: usize,
+    /// the cubes one candidate face overlaps
+    hits: Vec<u32>,
     occupied: usize,
     candidates: usize,
     visited: usize,
@@ -115,6 +120,8 @@ impl Scratch {
         if self.counts.len() != num_cells {
             self.counts = vec![0; num_cells];
             self.sums = vec![[0.0; 3]; num_cells];
+            // one more: the slot a repeat visit writes when all are touched
+            self.touched_cells = vec![0; num_cells + 1];
         }
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
@@ -122,7 +129,12 @@ impl Scratch {
             self.generation = 1;
         }
         self.queue.clear();
-        self.touched.clear();
+        self.touched = 0;
+    }
+
+    /// The cubes summed into since the last face, in the order first touched.
+    fn touched(&self) -> &[u32] {
+        &self.touched_cells[..self.touched]
     }
 }
 
@@ -254,8 +266,8 @@ impl Voxelizer {
         let frame = self.accumulate(scratch, f, yaw);
         let cells = grid_len / 3;
         out.fill(0.0);
-        for i in 0..scratch.touched.len() {
-            let cell = scratch.touched[i] as usize;
+        for i in 0..scratch.touched {
+            let cell = scratch.touched_cells[i] as usize;
             for (c, v) in scratch.take_mean(cell).into_iter().enumerate() {
                 out[c * cells + cell] = v;
             }
@@ -285,7 +297,7 @@ impl Voxelizer {
         // grid (145 words at 21³) instead of a sort
         let mut bits = std::mem::take(&mut scratch.bits);
         bits.resize(scratch.counts.len().div_ceil(64), 0);
-        for &cell in &scratch.touched {
+        for &cell in scratch.touched() {
             bits[cell as usize / 64] |= 1 << (cell % 64);
         }
         for (w, word) in bits.iter_mut().enumerate() {
@@ -357,30 +369,23 @@ impl Voxelizer {
             candidates += 1;
             let n_local = frame.to_local(n_g);
             let n_local = [n_local[0] as f32, n_local[1] as f32, n_local[2] as f32];
-            for i in range[0].0..=range[0].1 {
-                for k in range[2].0..=range[2].1 {
-                    if !tester.overlaps_zx(i, k) {
-                        continue;
-                    }
-                    for j in range[1].0..=range[1].1 {
-                        if !tester.overlaps_ij_jk(i, j, k) {
-                            continue;
-                        }
-                        let cell = (i * side + j) * side + k;
-                        let count = &mut scratch.counts[cell];
-                        if *count == 0 {
-                            scratch.touched.push(cell as u32);
-                        }
-                        *count += 1;
-                        let sum = &mut scratch.sums[cell];
-                        for (s, v) in sum.iter_mut().zip(n_local) {
-                            *s += v;
-                        }
-                    }
+            scratch.hits.clear();
+            tester.overlapped_cells(range, side, &mut scratch.hits);
+            for &cell in &scratch.hits {
+                let cell = cell as usize;
+                let count = &mut scratch.counts[cell];
+                // appended where first touched (no branch: the slot is
+                // overwritten otherwise)
+                scratch.touched_cells[scratch.touched] = cell as u32;
+                scratch.touched += usize::from(*count == 0);
+                *count += 1;
+                let sum = &mut scratch.sums[cell];
+                for (s, v) in sum.iter_mut().zip(n_local) {
+                    *s += v;
                 }
             }
         }
-        scratch.occupied = scratch.touched.len();
+        scratch.occupied = scratch.touched;
         scratch.candidates = candidates;
         scratch.visited = scratch.queue.len();
         frame
