@@ -26,6 +26,10 @@ pub(crate) struct Int8Conv {
     k: usize,
     stride: usize,
     pad: usize,
+    /// zero cubes on each side of the input's W rows in the layout `run`
+    /// reads (≥ `pad`; `pad` unless [`Int8Conv::reading_layout`] says
+    /// otherwise)
+    layout_pad: usize,
 }
 
 impl Int8Conv {
@@ -60,12 +64,21 @@ impl Int8Conv {
             k: c.k,
             stride: c.stride,
             pad: c.pad,
+            layout_pad: c.pad,
         })
     }
 
+    /// The same convolution reading inputs quantized with `layout_pad` zero
+    /// cubes on each side of every W row (`layout_pad ≥` its padding): a
+    /// 1³ shortcut reads the bytes quantized for its block's 3³ convolution.
+    pub(crate) fn reading_layout(mut self, layout_pad: usize) -> Int8Conv {
+        assert!(layout_pad >= self.pad, "the layout holds every padded tap");
+        self.layout_pad = layout_pad;
+        self
+    }
+
     /// As [`FoldedConv::run`] on an input quantized by [`quantize`] with
-    /// this convolution's padding (`input` bytes, f32 value = byte ·
-    /// `input_scale`).
+    /// [`Self::pad`] (`input` bytes, f32 value = byte · `input_scale`).
     ///
     /// # Safety
     /// The CPU must have AVX-512 F, BW and VNNI.
@@ -81,7 +94,7 @@ impl Int8Conv {
         relu: bool,
         region: Option<Region>,
     ) {
-        assert_eq!(input.len(), n * n * (n + 2 * self.pad) * self.cin);
+        assert_eq!(input.len(), n * n * (n + 2 * self.layout_pad) * self.cin);
         // V vectors of 16 output channels; tiles of 1 ..= 16 / V cubes
         // (at most 12): as many i32 chains in flight, within the 32 registers
         macro_rules! go {
@@ -112,20 +125,20 @@ impl Int8Conv {
     }
 
     /// Zero cubes on each side of the input's W rows that [`Self::run`]
-    /// expects (its padding).
+    /// expects (its padding, or the layout it was told to read).
     pub(crate) fn pad(&self) -> usize {
-        self.pad
+        self.layout_pad
     }
 
-    /// The input W rows (`d·n + h` of an `n³` input) that [`Self::run`]
+    /// Flags in `rows` (len `n²`, one per W row `d·n + h` of an `n³`
+    /// input; flags already set stay set) the input rows that [`Self::run`]
     /// reads when it computes the output cubes set in `mask`: the rows in
     /// the (d, h) window of every output row with a cube to compute.
-    pub(crate) fn rows_read(&self, mask: &[bool], n: usize, rows: &mut Vec<bool>) {
+    pub(crate) fn rows_read(&self, mask: &[bool], n: usize, rows: &mut [bool]) {
         let (k, s, p) = (self.k, self.stride, self.pad);
         let m = output_side(n, k, s, p);
         assert_eq!(mask.len(), m * m * m);
-        rows.clear();
-        rows.resize(n * n, false);
+        assert_eq!(rows.len(), n * n);
         for (o, row) in mask.chunks_exact(m).enumerate() {
             if row.contains(&true) {
                 let (od, oh) = (o / m, o % m);
@@ -398,14 +411,15 @@ unsafe fn tile_sums<const V: usize, const T: usize>(
     use std::arch::x86_64::*;
     let (k, s, p, cin, co) = (c.k, c.stride, c.pad, c.cin, c.cout);
     let groups = cin / 4;
-    let padded = (n + 2 * p) * cin;
+    let padded = (n + 2 * c.layout_pad) * cin;
     let mut acc = [[_mm512_setzero_si512(); V]; T];
     for kd in taps(od, s, p, k, n) {
         let id = od * s + kd - p;
         for kh in taps(oh, s, p, k, n) {
             let ih = oh * s + kh - p;
-            // padded W position of output cube ow's tap kw: ow·s + kw
-            let start = (id * n + ih) * padded + ow * s * cin;
+            // position in the padded W row of output cube ow's tap kw:
+            // ow·s + kw − p + layout_pad
+            let start = (id * n + ih) * padded + (ow * s + c.layout_pad - p) * cin;
             let x = &input[start..start + ((T - 1) * s + k) * cin];
             let first = (kd * k + kh) * k;
             let wt = &c.w[first * cin * co..(first + k) * cin * co];
@@ -560,6 +574,63 @@ mod tests {
         }
     }
 
+    /// A 1³ shortcut reading the bytes quantized for a 3³ convolution (W
+    /// rows between one zero cube each side) gives the exact integer sums.
+    #[test]
+    fn a_shortcut_reads_the_padded_layout_exactly() {
+        if !supported() {
+            eprintln!("no AVX-512 VNNI on this CPU: skipped");
+            return;
+        }
+        let mut state = 9u32;
+        let mut next = || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            state >> 8
+        };
+        for (cin, cout, stride, n) in [(16, 16, 1, 21), (16, 32, 2, 21), (32, 64, 2, 11)] {
+            let weight = (0..cout * cin)
+                .map(|i| ((i * 37 % 101) as f32 - 50.0) / 200.0)
+                .collect();
+            let c = ConvWeights {
+                in_channels: cin,
+                out_channels: cout,
+                kernel: 1,
+                stride,
+                padding: 0,
+                weight,
+                bias: Some((0..cout).map(|i| i as f32 * 0.01).collect()),
+            };
+            let f = FoldedConv::new(&c, &BatchNormWeights::identity(cout));
+            let q = Int8Conv::new(&f).expect("layout fits").reading_layout(1);
+            assert_eq!(q.pad(), 1);
+            let m = output_side(n, 1, stride, 0);
+            let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
+            let padded: Vec<u8> = x
+                .chunks_exact(n * cin)
+                .flat_map(|row| [&[0; 64][..cin], row, &[0; 64][..cin]].concat())
+                .collect();
+            let mask: Vec<bool> = (0..m * m * m)
+                .map(|o| o % 3 != 1 && next() % 5 != 0)
+                .collect();
+            let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
+            let region = Region {
+                mask: &mask,
+                background: Some(&background),
+            };
+            let mut want = vec![0.0; m * m * m * cout];
+            reference(&q, &x, 0.02, n, &mut want, false, region);
+            let mut got = vec![0.0; m * m * m * cout];
+            // SAFETY: supported() checked the features.
+            unsafe { q.run(&padded, 0.02, n, &mut got, false, true, Some(region)) };
+            assert!(
+                want.iter()
+                    .zip(&got)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "cin {cin} cout {cout} stride {stride}"
+            );
+        }
+    }
+
     #[test]
     fn the_tiles_give_the_exact_integer_sums() {
         if !supported() {
@@ -617,7 +688,7 @@ mod tests {
                     "cin {cin} cout {cout} stride {stride} n {n}"
                 );
                 // rows it does not read may hold anything
-                let mut rows = Vec::new();
+                let mut rows = vec![false; n * n];
                 q.rows_read(&mask, n, &mut rows);
                 assert!(rows.contains(&false), "some rows unread");
                 let mut garbled = padded.clone();

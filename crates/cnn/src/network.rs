@@ -143,6 +143,8 @@ struct Block {
     m: usize,
     /// `a` and `b` in 8-bit integers, once [`Cnn::set_precision`] asked for them
     int8: Option<(Int8Conv, Int8Conv)>,
+    /// the shortcut in 8-bit integers, reading the bytes quantized for `a`
+    shortcut_int8: Option<Int8Conv>,
 }
 
 /// Arithmetic of the residual blocks' 3³ convolutions.
@@ -154,7 +156,8 @@ pub enum Precision {
     /// 8-bit inputs and weights, exact i32 sums, f32 scale, bias and ReLU
     /// (AVX-512 VNNI; about 1 % of a layer's output range per value). The
     /// stem stays f32 unless [`Cnn::set_int8_stem`] asks for the row stem in
-    /// int8; shortcuts and fully connected layers stay f32.
+    /// int8, the 1³ shortcuts unless [`Cnn::set_int8_shortcut`] asks for
+    /// them; the fully connected layers stay f32.
     Int8,
 }
 
@@ -178,6 +181,8 @@ pub struct Cnn {
     stem_int8: Option<Int8Stem>,
     /// with int8 precision, the row stem runs `stem_int8`
     int8_stem: bool,
+    /// with int8 precision, the blocks' shortcuts run in int8
+    int8_shortcut: bool,
 }
 
 /// Activations of an all-empty grid: every cube whose receptive field holds
@@ -285,6 +290,7 @@ impl Cnn {
                 shortcut: FoldedConv::new(&bw.shortcut, &bw.bn_shortcut),
                 m,
                 int8: None,
+                shortcut_int8: None,
             });
             largest = largest.max(m.pow(3) * cout);
             n = m;
@@ -333,6 +339,7 @@ impl Cnn {
             row_stem: false,
             stem_int8: None,
             int8_stem: false,
+            int8_shortcut: false,
         };
         cnn.set_row_stem(true);
         let mut s = cnn.scratch();
@@ -378,6 +385,9 @@ impl Cnn {
             for b in &mut self.blocks {
                 if b.int8.is_none() {
                     b.int8 = Int8Conv::new(&b.a).zip(Int8Conv::new(&b.b));
+                    b.shortcut_int8 = Int8Conv::new(&b.shortcut)
+                        .filter(|_| b.shortcut.k == 1 && b.shortcut.pad <= b.a.pad)
+                        .map(|q| q.reading_layout(b.a.pad));
                 }
             }
             self.int8 = self.blocks.iter().all(|b| b.int8.is_some());
@@ -401,6 +411,19 @@ impl Cnn {
 
     fn runs_int8_stem(&self) -> bool {
         self.int8_stem && self.int8 && self.row_stem && self.stem_int8.is_some()
+    }
+
+    /// With [`Precision::Int8`], whether the residual blocks' 1³ shortcuts
+    /// run in 8-bit integers too (on the bytes quantized for the block's
+    /// first 3³ convolution) or in f32; returns whether they do now (int8
+    /// precision and every shortcut quantized).
+    pub fn set_int8_shortcut(&mut self, on: bool) -> bool {
+        self.int8_shortcut = on;
+        self.runs_int8_shortcut()
+    }
+
+    fn runs_int8_shortcut(&self) -> bool {
+        self.int8_shortcut && self.int8 && self.blocks.iter().all(|b| b.shortcut_int8.is_some())
     }
 
     /// Chooses how the stem runs: as 1D convolutions along the grid rows
@@ -568,6 +591,7 @@ impl Cnn {
         mut profile: Option<&mut LayerTimes>,
     ) {
         let lv = self.level;
+        let int8_shortcut = self.runs_int8_shortcut();
         let sparse = record.is_none();
         let mut clock = std::time::Instant::now();
         let mut lap = |slot: usize, profile: &mut Option<&mut LayerTimes>| {
@@ -635,23 +659,36 @@ impl Cnn {
                 let (near_a, near_y) = (&s.near_a, &s.near_y);
                 let only = |mask, background| Some(Region { mask, background });
                 lap(2 + 3 * bi, &mut profile);
-                b.shortcut
-                    .run(lv, x, n, y, false, false, only(near_y, None));
-                lap(2 + 3 * bi, &mut profile);
                 let region_a = only(near_a, Some(&self.background.a[bi]));
                 let region_b = only(near_y, Some(&self.background.y[bi]));
                 match &b.int8 {
                     #[cfg(target_arch = "x86_64")]
                     Some((qa, qb)) if self.int8 => {
+                        let shortcut = b.shortcut_int8.as_ref().filter(|_| int8_shortcut);
+                        s.rows_read.clear();
+                        s.rows_read.resize(n * n, false);
                         qa.rows_read(near_a, n, &mut s.rows_read);
+                        match shortcut {
+                            Some(q) => q.rows_read(near_y, n, &mut s.rows_read),
+                            None => b
+                                .shortcut
+                                .run(lv, x, n, y, false, false, only(near_y, None)),
+                        }
                         // the block's input is the stem's output in block 1
                         let max = stem_max.take();
                         let rows = (Some(&s.rows_read[..]), max);
                         let (xq, sx) = conv_int8::quantize(x, n, qa.pad(), rows, &mut s.quantized);
                         // SAFETY: `set_precision` enables int8 only where
                         // `conv_int8::supported()`.
+                        if let Some(q) = shortcut {
+                            unsafe { q.run(xq, sx, n, y, false, false, only(near_y, None)) };
+                        }
+                        lap(2 + 3 * bi, &mut profile);
+                        // SAFETY: as above.
                         unsafe { qa.run(xq, sx, n, t, false, true, region_a) };
                         lap(3 + 3 * bi, &mut profile);
+                        s.rows_read.clear();
+                        s.rows_read.resize(m * m, false);
                         qb.rows_read(near_y, m, &mut s.rows_read);
                         let rows = (Some(&s.rows_read[..]), None);
                         let (tq, st) = conv_int8::quantize(t, m, qb.pad(), rows, &mut s.quantized);
@@ -659,6 +696,9 @@ impl Cnn {
                         unsafe { qb.run(tq, st, m, y, true, true, region_b) };
                     }
                     _ => {
+                        b.shortcut
+                            .run(lv, x, n, y, false, false, only(near_y, None));
+                        lap(2 + 3 * bi, &mut profile);
                         b.a.run(lv, x, n, t, false, true, region_a);
                         lap(3 + 3 * bi, &mut profile);
                         b.b.run(lv, t, m, y, true, true, region_b);

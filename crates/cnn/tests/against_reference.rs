@@ -220,6 +220,34 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
 }
 
 #[test]
+fn the_int8_shortcuts_run_only_with_int8_and_stay_near_the_reference() {
+    let (grid, batch) = (21, 6);
+    let w = common::random_net(6, grid, [16, 32, 64]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    assert!(!cnn.set_int8_shortcut(true), "not with f32 precision");
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(800 + i as u64, grid))
+        .collect();
+    if cnn.set_precision(Precision::Int8) != Precision::Int8 {
+        eprintln!("no AVX-512 VNNI on this CPU: no int8 shortcuts (checked), rest skipped");
+        assert!(!cnn.set_int8_shortcut(true));
+        return;
+    }
+    let mut f32_shortcuts = vec![0.0f32; batch * 18];
+    assert!(!cnn.set_int8_shortcut(false));
+    cnn.forward(&grids, &mut f32_shortcuts).unwrap();
+    let mut out = vec![0.0f32; batch * 18];
+    assert!(cnn.set_int8_shortcut(true));
+    cnn.forward(&grids, &mut out).unwrap();
+    assert_ne!(out, f32_shortcuts, "the int8 shortcuts did not run");
+    let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
+    println!("int8 with int8 shortcuts vs f64: largest output difference {worst:e}");
+    assert!(worst < INT8_TOLERANCE, "int8 shortcuts off by {worst}");
+    cnn.set_precision(Precision::F32);
+    assert!(!cnn.set_int8_shortcut(true), "f32 precision again");
+}
+
+#[test]
 fn sparse_inputs_give_the_dense_outputs_and_bad_ones_are_named() {
     let (grid, batch) = (21, 10);
     let w = common::random_net(8, grid, [16, 32, 64]);

@@ -22,6 +22,9 @@ pub const MODEL_ENV: &str = "NORMALNET_MODEL";
 /// Whether NormalNet runs its residual blocks in 8-bit integers by default.
 pub const INT8_DEFAULT: bool = true;
 
+/// Whether the shortcuts run in 8-bit integers by default (with `int8`).
+pub const INT8_SHORTCUT_DEFAULT: bool = true;
+
 /// The registry entry.
 pub const INFO: MethodInfo = MethodInfo {
     name: "normalnet",
@@ -106,6 +109,10 @@ pub struct NormalnetParams {
     /// chaotic cone s42, −0.036° with it, for a stem about twice as fast;
     /// `Cnn::set_int8_stem`)
     pub int8_stem: bool,
+    /// with `int8`, the residual blocks' 1³ shortcuts in 8-bit integers
+    /// too, on the bytes quantized for the block's first convolution
+    /// (`Cnn::set_int8_shortcut`)
+    pub int8_shortcut: bool,
 }
 
 impl Default for NormalnetParams {
@@ -130,6 +137,7 @@ impl Default for NormalnetParams {
             switch: d.switch,
             int8: INT8_DEFAULT,
             int8_stem: INT8_DEFAULT,
+            int8_shortcut: INT8_SHORTCUT_DEFAULT,
         }
     }
 }
@@ -205,6 +213,8 @@ struct NormalNet {
     precision: Precision,
     /// whether the stem runs in int8 (`int8_stem` where the CPU and network allow)
     int8_stem: bool,
+    /// whether the shortcuts run in int8 (`int8_shortcut`, as `int8_stem`)
+    int8_shortcut: bool,
 }
 
 fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseError> {
@@ -217,11 +227,13 @@ fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseE
         Precision::F32
     });
     let int8_stem = bundle.set_int8_stem(params.int8_stem);
+    let int8_shortcut = bundle.set_int8_shortcut(params.int8_shortcut);
     Ok(Box::new(NormalNet {
         params,
         bundle,
         precision,
         int8_stem,
+        int8_shortcut,
     }))
 }
 
@@ -233,6 +245,7 @@ impl Method for NormalNet {
         // and the arithmetic that ran (int8 falls back to f32 without VNNI)
         v["int8"] = Value::Bool(self.precision == Precision::Int8);
         v["int8_stem"] = Value::Bool(self.int8_stem);
+        v["int8_shortcut"] = Value::Bool(self.int8_shortcut);
         v
     }
 

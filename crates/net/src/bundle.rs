@@ -261,6 +261,17 @@ impl Bundle {
         effective
     }
 
+    /// Whether every network's residual-block shortcuts run in 8-bit
+    /// integers with int8 precision (see [`Cnn::set_int8_shortcut`]);
+    /// returns whether they do now.
+    pub fn set_int8_shortcut(&mut self, on: bool) -> bool {
+        let mut effective = on;
+        for engine in &mut self.engines {
+            effective = engine.set_int8_shortcut(on);
+        }
+        effective
+    }
+
     /// Loads the bundle in folder `path`.
     ///
     /// # Errors
