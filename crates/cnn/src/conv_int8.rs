@@ -78,7 +78,7 @@ impl Int8Conv {
     }
 
     /// As [`FoldedConv::run`] on an input quantized by [`quantize`] with
-    /// [`Self::pad`] (`input` bytes, f32 value = byte · `input_scale`).
+    /// [`Self::input_pad`] (`input` bytes, f32 value = byte · `input_scale`).
     ///
     /// # Safety
     /// The CPU must have AVX-512 F, BW and VNNI.
@@ -126,7 +126,7 @@ impl Int8Conv {
 
     /// Zero cubes on each side of the input's W rows that [`Self::run`]
     /// expects (its padding, or the layout it was told to read).
-    pub(crate) fn pad(&self) -> usize {
+    pub(crate) fn input_pad(&self) -> usize {
         self.layout_pad
     }
 
@@ -511,7 +511,7 @@ mod tests {
                 f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
                 let mut got = start.clone();
                 let mut buffer = Vec::new();
-                let (xq, sx) = quantize(&x, n, q.pad(), (None, None), &mut buffer);
+                let (xq, sx) = quantize(&x, n, q.input_pad(), (None, None), &mut buffer);
                 // SAFETY: supported() checked the features.
                 unsafe { q.run(xq, sx, n, &mut got, accumulate, relu, None) };
                 let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
@@ -602,7 +602,7 @@ mod tests {
             };
             let f = FoldedConv::new(&c, &BatchNormWeights::identity(cout));
             let q = Int8Conv::new(&f).expect("layout fits").reading_layout(1);
-            assert_eq!(q.pad(), 1);
+            assert_eq!(q.input_pad(), 1);
             let m = output_side(n, 1, stride, 0);
             let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
             let padded: Vec<u8> = x

@@ -677,7 +677,8 @@ impl Cnn {
                         // the block's input is the stem's output in block 1
                         let max = stem_max.take();
                         let rows = (Some(&s.rows_read[..]), max);
-                        let (xq, sx) = conv_int8::quantize(x, n, qa.pad(), rows, &mut s.quantized);
+                        let (xq, sx) =
+                            conv_int8::quantize(x, n, qa.input_pad(), rows, &mut s.quantized);
                         // SAFETY: `set_precision` enables int8 only where
                         // `conv_int8::supported()`.
                         if let Some(q) = shortcut {
@@ -691,7 +692,8 @@ impl Cnn {
                         s.rows_read.resize(m * m, false);
                         qb.rows_read(near_y, m, &mut s.rows_read);
                         let rows = (Some(&s.rows_read[..]), None);
-                        let (tq, st) = conv_int8::quantize(t, m, qb.pad(), rows, &mut s.quantized);
+                        let (tq, st) =
+                            conv_int8::quantize(t, m, qb.input_pad(), rows, &mut s.quantized);
                         // SAFETY: as above.
                         unsafe { qb.run(tq, st, m, y, true, true, region_b) };
                     }
