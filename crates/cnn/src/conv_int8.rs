@@ -349,12 +349,16 @@ fn dense_vnni<const V: usize>(
         }
     };
     let computed = |o: usize| region.is_none_or(|r| r.mask[o]);
-    // a cube outside the region takes the background's value, if any
-    let background = |o: usize, out: &mut [f32]| {
+    // cubes outside the region take the background's value, if any (runs
+    // of cubes in one copy: a library call per 64-byte cube cost more
+    // than the copy)
+    let background_run = |cubes: std::ops::Range<usize>, out: &mut [f32]| {
         if let Some(bg) = region.and_then(|r| r.background) {
-            out[o * co..o * co + co].copy_from_slice(&bg[o * co..o * co + co]);
+            let at = cubes.start * co..cubes.end * co;
+            out[at.clone()].copy_from_slice(&bg[at]);
         }
     };
+    let background = |o: usize, out: &mut [f32]| background_run(o..o + 1, out);
     let mut sums = [[_mm512_setzero_si512(); V]; 12];
     assert!((1..=sums.len()).contains(&tiles.len()));
     for od in 0..m {
@@ -364,12 +368,12 @@ fn dense_vnni<const V: usize>(
             // cube between them not in the region is computed, then
             // replaced by the background), the rest background
             let Some(lo) = (0..m).find(|&w| computed(first + w)) else {
-                (first..first + m).for_each(|o| background(o, out));
+                background_run(first..first + m, out);
                 continue;
             };
             let hi = (lo..m).rfind(|&w| computed(first + w)).map_or(m, |w| w + 1);
-            (first..first + lo).for_each(|o| background(o, out));
-            (first + hi..first + m).for_each(|o| background(o, out));
+            background_run(first..first + lo, out);
+            background_run(first + hi..first + m, out);
             let mut ow = lo;
             while ow < hi {
                 let t = tile_len(hi - ow, tiles.len());
