@@ -58,12 +58,87 @@ impl MulAdd for Plain {
     }
 }
 
+/// A set of cubes of a `side³` grid (`side ≤ 64`): one bit set per W row
+/// (row `d·side + h`, bit `w`), so that a row's cubes are tested, spanned
+/// and dilated with a few word operations.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct CubeMask {
+    side: usize,
+    rows: Vec<u64>,
+}
+
+impl CubeMask {
+    /// Largest grid side a mask holds.
+    pub(crate) const MAX_SIDE: usize = 64;
+
+    /// Empties the mask for a `side³` grid.
+    pub(crate) fn reset(&mut self, side: usize) {
+        assert!(
+            side <= Self::MAX_SIDE,
+            "grid side {side} over {}",
+            Self::MAX_SIDE
+        );
+        self.side = side;
+        self.rows.clear();
+        self.rows.resize(side * side, 0);
+    }
+
+    /// The cubes flagged in `flags` (len `side³`).
+    #[cfg(test)]
+    pub(crate) fn from_flags(flags: &[bool], side: usize) -> CubeMask {
+        assert_eq!(flags.len(), side.pow(3));
+        let mut mask = CubeMask::default();
+        mask.reset(side);
+        for (row, f) in mask.rows.iter_mut().zip(flags.chunks_exact(side)) {
+            *row = bits_of(f);
+        }
+        mask
+    }
+
+    /// One flag per cube.
+    #[cfg(test)]
+    pub(crate) fn to_flags(&self) -> Vec<bool> {
+        let side = self.side;
+        (0..side.pow(3)).map(|o| self.contains(o)).collect()
+    }
+
+    /// The grid side.
+    pub(crate) fn side(&self) -> usize {
+        self.side
+    }
+
+    /// Whether cube `o` (`(d·side + h)·side + w`) is in the set.
+    #[inline(always)]
+    pub(crate) fn contains(&self, o: usize) -> bool {
+        self.rows[o / self.side] >> (o % self.side) & 1 == 1
+    }
+
+    /// The bits of W row `d·side + h`.
+    #[inline(always)]
+    pub(crate) fn row(&self, row: usize) -> u64 {
+        self.rows[row]
+    }
+
+    /// The W rows' bits, to set.
+    pub(crate) fn rows_mut(&mut self) -> &mut [u64] {
+        &mut self.rows
+    }
+
+    /// Adds the cubes of `other` (same side).
+    pub(crate) fn union_with(&mut self, other: &CubeMask) {
+        assert_eq!(self.side, other.side);
+        for (a, b) in self.rows.iter_mut().zip(&other.rows) {
+            *a |= b;
+        }
+    }
+}
+
 /// Which output cubes to compute: the others are copied from `background`
 /// (when given) or left as they are.
 #[derive(Clone, Copy)]
 pub(crate) struct Region<'a> {
-    /// one flag per output cube: compute it
-    pub mask: &'a [bool],
+    /// the output cubes to compute
+    pub mask: &'a CubeMask,
     /// `[m, m, m, cout]`: the value of every cube not computed
     pub background: Option<&'a [f32]>,
 }
@@ -187,50 +262,80 @@ impl FoldedConv {
 }
 
 impl FoldedConv {
-    /// Output cubes whose input window holds a flagged input cube: `mask_in`
-    /// over the `n³` input, result over the `m³` output.
-    pub(crate) fn window_mask(&self, mask_in: &[bool], n: usize, out: &mut Vec<bool>) {
+    /// Output cubes whose input window holds a cube of `mask_in` (an `n³`
+    /// input), as a mask of the `m³` output: an output row ORs the ≤ k²
+    /// input rows of its (d, h) window, then each output cube tests its W
+    /// window.
+    pub(crate) fn window_mask(&self, mask_in: &CubeMask, out: &mut CubeMask) {
         let (k, s, p) = (self.k, self.stride, self.pad);
+        let n = mask_in.side();
         let m = self.output_side(n);
-        out.clear();
-        out.resize(m * m * m, false);
-        if n <= 64 {
-            // W rows as bit sets: an output row ORs the ≤ k² input rows of
-            // its (d, h) window, then each output cube tests its W window
-            let rows: Vec<u64> = mask_in.chunks_exact(n).map(bits_of).collect();
-            let windows: Vec<u64> = (0..m)
-                .map(|ow| taps(ow, s, p, k, n).fold(0, |bits, kw| bits | 1 << (ow * s + kw - p)))
-                .collect();
-            for od in 0..m {
-                for oh in 0..m {
-                    let mut any = 0u64;
-                    for kd in taps(od, s, p, k, n) {
-                        for kh in taps(oh, s, p, k, n) {
-                            any |= rows[(od * s + kd - p) * n + oh * s + kh - p];
-                        }
-                    }
-                    if any != 0 {
-                        let first = (od * m + oh) * m;
-                        for (flag, window) in out[first..first + m].iter_mut().zip(&windows) {
-                            *flag = any & window != 0;
-                        }
-                    }
-                }
-            }
-            return;
+        out.reset(m);
+        if s == 1 {
+            return self.window_mask_stride_1(mask_in, out);
+        }
+        // per output cube ow, the bits of its W window
+        let mut windows = [0u64; CubeMask::MAX_SIDE];
+        for (ow, w) in windows[..m].iter_mut().enumerate() {
+            *w = taps(ow, s, p, k, n).fold(0, |bits, kw| bits | 1 << (ow * s + kw - p));
         }
         for od in 0..m {
             for oh in 0..m {
-                for ow in 0..m {
-                    out[(od * m + oh) * m + ow] = taps(od, s, p, k, n).any(|kd| {
-                        taps(oh, s, p, k, n).any(|kh| {
-                            taps(ow, s, p, k, n).any(|kw| {
-                                mask_in[((od * s + kd - p) * n + oh * s + kh - p) * n + ow * s + kw
-                                    - p]
-                            })
-                        })
-                    });
+                let mut any = 0u64;
+                for kd in taps(od, s, p, k, n) {
+                    for kh in taps(oh, s, p, k, n) {
+                        any |= mask_in.row((od * s + kd - p) * n + oh * s + kh - p);
+                    }
                 }
+                out.rows[od * m + oh] = windows[..m]
+                    .iter()
+                    .enumerate()
+                    .fold(0, |bits, (ow, &w)| bits | u64::from(any & w != 0) << ow);
+            }
+        }
+    }
+
+    /// [`Self::window_mask`] at stride 1 (output `o` sees inputs `o − p ..=
+    /// o − p + k − 1` on every axis), one axis at a time: rows ORed along
+    /// H, then along D, then each row's bits shifted along W.
+    fn window_mask_stride_1(&self, mask_in: &CubeMask, out: &mut CubeMask) {
+        let (k, p) = (self.k, self.pad);
+        let (n, m) = (mask_in.side(), out.side());
+        // output rows oh of every input depth: ORs of input rows oh − p + kh
+        let mut along_h = vec![0u64; n * m];
+        for (id, dst) in along_h.chunks_exact_mut(m).enumerate() {
+            let src = &mask_in.rows[id * n..(id + 1) * n];
+            for kh in 0..k {
+                // input row ih = oh + kh − p in 0..n
+                let first = p.saturating_sub(kh);
+                let last = (n + p).saturating_sub(kh).min(m);
+                for oh in first..last {
+                    dst[oh] |= src[oh + kh - p];
+                }
+            }
+        }
+        for od in 0..m {
+            let dst = &mut out.rows[od * m..(od + 1) * m];
+            for kd in 0..k {
+                let Some(id) = (od + kd).checked_sub(p).filter(|&id| id < n) else {
+                    continue;
+                };
+                for (d, &h) in dst.iter_mut().zip(&along_h[id * m..(id + 1) * m]) {
+                    *d |= h;
+                }
+            }
+            // output ow sees input bits ow − p + kw: shift by p − kw
+            for row in dst.iter_mut() {
+                let any = *row;
+                let mut bits = 0u64;
+                for kw in 0..k {
+                    bits |= if kw > p {
+                        any >> (kw - p)
+                    } else {
+                        any << (p - kw)
+                    };
+                }
+                *row = bits & (u64::MAX >> (64 - m));
             }
         }
     }
@@ -313,7 +418,7 @@ unsafe fn pointwise_avx512<const B: usize>(
             for ow in 0..m {
                 let o = first + ow;
                 if let Some(r) = region
-                    && !r.mask[o]
+                    && !r.mask.contains(o)
                 {
                     if let Some(bg) = r.background {
                         out[o * co..(o + 1) * co].copy_from_slice(&bg[o * co..(o + 1) * co]);
@@ -420,7 +525,7 @@ pub(crate) fn output_side(n: usize, k: usize, s: usize, p: usize) -> usize {
 
 /// The flags of `row` (at most 64) as bits: bit i set where `row[i]`;
 /// eight flags at a time (their bytes, 0 or 1, gathered by one multiply).
-#[inline]
+#[cfg(test)]
 pub(crate) fn bits_of(row: &[bool]) -> u64 {
     debug_assert!(row.len() <= 64);
     let chunks = row.chunks_exact(8);
@@ -471,7 +576,7 @@ fn dense<const CO: usize, const S: usize, F: MulAdd>(
                 let dst: &mut [f32; CO] =
                     (&mut out[o * CO..o * CO + CO]).try_into().expect("out row");
                 if let Some(r) = region
-                    && !r.mask[o]
+                    && !r.mask.contains(o)
                 {
                     if let Some(bg) = r.background {
                         dst.copy_from_slice(&bg[o * CO..o * CO + CO]);

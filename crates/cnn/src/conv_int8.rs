@@ -11,7 +11,7 @@
 //! scaled back to f32 once per output, where the bias, the residual sum and
 //! the ReLU are applied as in [`crate::conv`].
 
-use crate::conv::{FoldedConv, Region, output_side, taps};
+use crate::conv::{CubeMask, FoldedConv, Region, output_side, taps};
 
 /// A [`FoldedConv`] with its weights in signed bytes, laid out
 /// `[k³][cin/4][cout][4]` (four input channels per i32 lane).
@@ -134,13 +134,13 @@ impl Int8Conv {
     /// input; flags already set stay set) the input rows that [`Self::run`]
     /// reads when it computes the output cubes set in `mask`: the rows in
     /// the (d, h) window of every output row with a cube to compute.
-    pub(crate) fn rows_read(&self, mask: &[bool], n: usize, rows: &mut [bool]) {
+    pub(crate) fn rows_read(&self, mask: &CubeMask, n: usize, rows: &mut [bool]) {
         let (k, s, p) = (self.k, self.stride, self.pad);
         let m = output_side(n, k, s, p);
-        assert_eq!(mask.len(), m * m * m);
+        assert_eq!(mask.side(), m);
         assert_eq!(rows.len(), n * n);
-        for (o, row) in mask.chunks_exact(m).enumerate() {
-            if row.contains(&true) {
+        for o in 0..m * m {
+            if mask.row(o) != 0 {
                 let (od, oh) = (o / m, o % m);
                 for kd in taps(od, s, p, k, n) {
                     for kh in taps(oh, s, p, k, n) {
@@ -348,7 +348,7 @@ fn dense_vnni<const V: usize>(
             unsafe { _mm512_storeu_ps(d.as_mut_ptr(), y) };
         }
     };
-    let computed = |o: usize| region.is_none_or(|r| r.mask[o]);
+    let computed = |o: usize| region.is_none_or(|r| r.mask.contains(o));
     // cubes outside the region take the background's value, if any (runs
     // of cubes in one copy: a library call per 64-byte cube cost more
     // than the copy)
@@ -367,11 +367,18 @@ fn dense_vnni<const V: usize>(
             // the row's computed cubes lie in lo..hi: those in tiles (a
             // cube between them not in the region is computed, then
             // replaced by the background), the rest background
-            let Some(lo) = (0..m).find(|&w| computed(first + w)) else {
-                background_run(first..first + m, out);
-                continue;
+            // the first and last cube to compute
+            let (lo, hi) = match region.map(|r| r.mask.row(od * m + oh)) {
+                None => (0, m),
+                Some(0) => {
+                    background_run(first..first + m, out);
+                    continue;
+                }
+                Some(bits) => (
+                    bits.trailing_zeros() as usize,
+                    64 - bits.leading_zeros() as usize,
+                ),
             };
-            let hi = (lo..m).rfind(|&w| computed(first + w)).map_or(m, |w| w + 1);
             background_run(first..first + lo, out);
             background_run(first + hi..first + m, out);
             let mut ow = lo;
@@ -549,7 +556,7 @@ mod tests {
         let m = output_side(n, k, s, p);
         for o in 0..m * m * m {
             let at = o * co..o * co + co;
-            if !region.mask[o] {
+            if !region.mask.contains(o) {
                 out[at.clone()].copy_from_slice(&region.background.expect("bg")[at]);
                 continue;
             }
@@ -617,8 +624,9 @@ mod tests {
                 .map(|o| o % 3 != 1 && next() % 5 != 0)
                 .collect();
             let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
+            let cube_mask = CubeMask::from_flags(&mask, m);
             let region = Region {
-                mask: &mask,
+                mask: &cube_mask,
                 background: Some(&background),
             };
             let mut want = vec![0.0; m * m * m * cout];
@@ -672,8 +680,9 @@ mod tests {
                 .map(|o| o / (m * m) < m / 2 && o / m % 3 != 1 && next() % 4 != 0)
                 .collect();
             let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
+            let cube_mask = CubeMask::from_flags(&mask, m);
             let region = Region {
-                mask: &mask,
+                mask: &cube_mask,
                 background: Some(&background),
             };
             let start: Vec<f32> = (0..m * m * m * cout)
@@ -693,7 +702,7 @@ mod tests {
                 );
                 // rows it does not read may hold anything
                 let mut rows = vec![false; n * n];
-                q.rows_read(&mask, n, &mut rows);
+                q.rows_read(&cube_mask, n, &mut rows);
                 assert!(rows.contains(&false), "some rows unread");
                 let mut garbled = padded.clone();
                 for (bytes, _) in garbled

@@ -1,6 +1,6 @@
 //! `Cnn`: a compiled network — folded layers, forward pass over a batch.
 
-use crate::conv::{FoldedConv, Level, Region, SUPPORTED_CHANNELS};
+use crate::conv::{CubeMask, FoldedConv, Level, Region, SUPPORTED_CHANNELS};
 use crate::conv_int8::{self, Int8Conv};
 use crate::error::CnnError;
 use crate::sparse_conv::Occupied;
@@ -205,10 +205,10 @@ struct Scratch {
     y: Vec<f32>,
     v: Vec<f32>,
     /// cubes of the current activation whose receptive field is occupied
-    near: Vec<bool>,
-    near_a: Vec<bool>,
-    near_s: Vec<bool>,
-    near_y: Vec<bool>,
+    near: CubeMask,
+    near_a: CubeMask,
+    near_s: CubeMask,
+    near_y: CubeMask,
     /// an input quantized for the int8 convolutions
     quantized: Vec<u8>,
     /// the input W rows an int8 convolution reads
@@ -570,10 +570,10 @@ impl Cnn {
             t: vec![0.0; self.largest],
             y: vec![0.0; self.largest],
             v: vec![0.0; self.largest],
-            near: Vec::new(),
-            near_a: Vec::new(),
-            near_s: Vec::new(),
-            near_y: Vec::new(),
+            near: CubeMask::default(),
+            near_a: CubeMask::default(),
+            near_s: CubeMask::default(),
+            near_y: CubeMask::default(),
             quantized: Vec::new(),
             rows_read: Vec::new(),
         }
@@ -592,7 +592,9 @@ impl Cnn {
     ) {
         let lv = self.level;
         let int8_shortcut = self.runs_int8_shortcut();
-        let sparse = record.is_none();
+        // only the cubes near the surface (masks of grids up to 64 cubes a
+        // side), unless the empty grid's activations are being recorded
+        let sparse = record.is_none() && self.grid <= CubeMask::MAX_SIDE;
         let mut clock = std::time::Instant::now();
         let mut lap = |slot: usize, profile: &mut Option<&mut LayerTimes>| {
             if let Some(p) = profile.as_deref_mut() {
@@ -650,12 +652,10 @@ impl Cnn {
             let y = &mut s.y[..m * m * m * co];
             let t = &mut s.t[..m * m * m * co];
             if sparse {
-                b.a.window_mask(&s.near, n, &mut s.near_a);
-                b.shortcut.window_mask(&s.near, n, &mut s.near_s);
-                b.b.window_mask(&s.near_a, m, &mut s.near_y);
-                for (y, &s) in s.near_y.iter_mut().zip(&s.near_s) {
-                    *y |= s;
-                }
+                b.a.window_mask(&s.near, &mut s.near_a);
+                b.shortcut.window_mask(&s.near, &mut s.near_s);
+                b.b.window_mask(&s.near_a, &mut s.near_y);
+                s.near_y.union_with(&s.near_s);
                 let (near_a, near_y) = (&s.near_a, &s.near_y);
                 let only = |mask, background| Some(Region { mask, background });
                 lap(2 + 3 * bi, &mut profile);

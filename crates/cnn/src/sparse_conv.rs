@@ -4,7 +4,7 @@
 //! occupied input cube adds its contribution to the `k³` outputs it reaches.
 //! Stride 1 only (the stem of SPEC §6).
 
-use crate::conv::{FoldedConv, Fused, Level, MulAdd, Plain};
+use crate::conv::{CubeMask, FoldedConv, Fused, Level, MulAdd, Plain};
 
 /// Occupied cubes of a `[cin, n, n, n]` channel-major grid: flat cube indices
 /// and their `cin` values, channels-last.
@@ -118,19 +118,19 @@ fn scatter_avx2<const CO: usize>(
 }
 
 impl FoldedConv {
-    /// Output cubes reached by an occupied input cube (len `m³`).
-    pub(crate) fn reach_mask(&self, occupied: &Occupied, n: usize, out: &mut Vec<bool>) {
+    /// Output cubes reached by an occupied input cube (of an `n³` grid).
+    pub(crate) fn reach_mask(&self, occupied: &Occupied, n: usize, out: &mut CubeMask) {
         let (k, p) = (self.k, self.pad);
         let m = self.output_side(n);
-        out.clear();
-        out.resize(m * m * m, false);
+        out.reset(m);
+        let rows = out.rows_mut();
         for &i in &occupied.index {
             let i = i as usize;
             let (id, ih, iw) = (i / (n * n), (i / n) % n, i % n);
             for kd in reach(id, p, k, m) {
                 for kh in reach(ih, p, k, m) {
                     for kw in reach(iw, p, k, m) {
-                        out[((id + p - kd) * m + ih + p - kh) * m + iw + p - kw] = true;
+                        rows[(id + p - kd) * m + ih + p - kh] |= 1 << (iw + p - kw);
                     }
                 }
             }
@@ -267,7 +267,14 @@ mod tests {
             state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
             (state >> 8) % 100 < p
         };
-        for (k, stride, pad) in [(5, 1, 2), (3, 1, 1), (3, 2, 1), (1, 2, 0)] {
+        for (k, stride, pad) in [
+            (5, 1, 2),
+            (3, 1, 1),
+            (3, 2, 1),
+            (1, 2, 0),
+            (1, 1, 0),
+            (3, 1, 0),
+        ] {
             let conv = ConvWeights {
                 in_channels: 1,
                 out_channels: 8,
@@ -302,15 +309,15 @@ mod tests {
                     }
                 }
             }
-            let mut got = Vec::new();
-            c.window_mask(&mask, n, &mut got);
-            assert_eq!(got, want, "k {k} stride {stride}");
+            let mut got = CubeMask::default();
+            c.window_mask(&CubeMask::from_flags(&mask, n), &mut got);
+            assert_eq!(got.to_flags(), want, "k {k} stride {stride}");
             if stride == 1 && k == 5 {
                 let mut occ = Occupied::default();
                 let grid: Vec<f32> = mask.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect();
                 occ.gather(&grid, 1);
                 c.reach_mask(&occ, n, &mut got);
-                assert_eq!(got, want, "reach mask");
+                assert_eq!(got.to_flags(), want, "reach mask");
             }
         }
     }

@@ -21,7 +21,7 @@
 //! output cube's W window as 15 packed bytes (four `vpdpbusd` per cube and
 //! input row) in tiles of up to 12 cubes over that span.
 
-use crate::conv::FoldedConv;
+use crate::conv::{CubeMask, FoldedConv};
 use crate::sparse_conv::Occupied;
 
 /// Output cubes per register block: 7 accumulators, 15 weights and the
@@ -271,14 +271,13 @@ fn for_each_span(
     [n, p, m]: [usize; 3],
     out: &mut [f32],
     background: [f32; CO],
-    mut near: Option<&mut Vec<bool>>,
+    mut near: Option<&mut CubeMask>,
     mut span: impl FnMut(usize, usize, &[(usize, usize, u64)], &mut [f32]),
 ) -> bool {
     assert!(out.len() == m * m * m * CO && rows.slot.len() == n * n);
     assert!(rows.len == m.div_ceil(CHUNK) * CHUNK + K - 1);
     if let Some(near) = near.as_deref_mut() {
-        near.clear();
-        near.resize(m * m * m, false);
+        near.reset(m);
     }
     let mut any_background = false;
     // (first cube of the input row, its (kd, kh) tap row, the output cubes
@@ -306,9 +305,7 @@ fn for_each_span(
                 continue;
             }
             if let Some(near) = near.as_deref_mut() {
-                for (ow, flag) in near[first..first + m].iter_mut().enumerate() {
-                    *flag = reached >> ow & 1 == 1;
-                }
+                near.rows_mut()[od * m + oh] = reached;
             }
             span(lo, hi, &reach, dst);
         }
@@ -351,7 +348,7 @@ pub(crate) unsafe fn run(
     n: usize,
     out: &mut [f32],
     relu: bool,
-    near: Option<&mut Vec<bool>>,
+    near: Option<&mut CubeMask>,
 ) {
     use std::arch::x86_64::*;
     let (p, m) = (c.pad, c.output_side(n));
@@ -436,7 +433,7 @@ pub(crate) unsafe fn run_int8(
     n: usize,
     out: &mut [f32],
     relu: bool,
-    near: Option<&mut Vec<bool>>,
+    near: Option<&mut CubeMask>,
 ) -> f32 {
     use std::arch::x86_64::*;
     let m = crate::conv::output_side(n, K, 1, p);
@@ -616,7 +613,7 @@ mod tests {
         }
         for n in SIDES {
             let (c, occ, rows, m) = stem_and_grid(n);
-            let mut want_near = Vec::new();
+            let mut want_near = CubeMask::default();
             c.reach_mask(&occ, n, &mut want_near);
             for relu in [false, true] {
                 // the scatter of the occupied cubes (its own test: against
@@ -624,7 +621,8 @@ mod tests {
                 let mut want = vec![f32::NAN; m * m * m * 16];
                 c.run_sparse(Level::Scalar, &occ, n, &mut want, relu);
                 let mut got = vec![f32::NAN; m * m * m * 16];
-                let mut near = vec![true; 3];
+                // a mask of another grid, all set: reset by the stem
+                let mut near = CubeMask::from_flags(&[true; 8], 2);
                 // SAFETY: AVX-512F detected above; `serves` holds.
                 unsafe { run(&c, &rows, n, &mut got, relu, Some(&mut near)) };
                 assert_eq!(near, want_near, "n {n}: near cubes");
@@ -667,7 +665,8 @@ mod tests {
                 let mut want = vec![f32::NAN; m * m * m * 16];
                 let mut exact = vec![f32::NAN; m * m * m * 16];
                 let mut got = vec![f32::NAN; m * m * m * 16];
-                let (mut want_near, mut near) = (Vec::new(), vec![true; 3]);
+                let mut want_near = CubeMask::default();
+                let mut near = CubeMask::from_flags(&[true; 8], 2);
                 // SAFETY: VNNI (with F and BW) detected above; `serves` holds.
                 unsafe {
                     run(
