@@ -196,6 +196,10 @@ struct Background {
     y: Vec<Vec<f32>>,
 }
 
+/// Largest per-thread buffers [`Cnn`] keeps between calls (the lite
+/// networks need 2.4 MB; the paper preset's 70 MB are allocated per call).
+const KEPT_SCRATCH: usize = 16 << 20;
+
 /// Per-thread buffers of one forward pass.
 struct Scratch {
     occupied: Occupied,
@@ -518,14 +522,10 @@ impl Cnn {
         let no = self.outputs();
         // Runs of a few samples, so that a thread slowed by other work (the
         // voxelizer shares the cores) does not leave the others idle at the
-        // end of the batch; each run borrows a thread's buffers from a pool
-        // (at most one set per thread is allocated per call).
+        // end of the batch; each run uses its thread's buffers, kept between
+        // calls (fresh ones were 2.4 MB per thread and batch to fault in and
+        // zero)
         const RUN: usize = 8;
-        let pool = std::sync::Mutex::new(Vec::new());
-        let take = || {
-            let mut p = pool.lock().unwrap_or_else(|e| e.into_inner());
-            p.pop()
-        };
         let width = self.pooled_width();
         let mut pooled = vec![0.0f32; out.len() / no * width];
         // the convolutions sample by sample
@@ -533,12 +533,12 @@ impl Cnn {
             .par_chunks_mut(RUN * width)
             .enumerate()
             .for_each(|(r, pooled)| {
-                let mut s = take().unwrap_or_else(|| self.scratch());
-                for (i, p) in pooled.chunks_exact_mut(width).enumerate() {
-                    self.run(sample(RUN * r + i), &mut s, None, None, None);
-                    p.copy_from_slice(&s.v[..width]);
-                }
-                pool.lock().unwrap_or_else(|e| e.into_inner()).push(s);
+                self.with_thread_scratch(|s| {
+                    for (i, p) in pooled.chunks_exact_mut(width).enumerate() {
+                        self.run(sample(RUN * r + i), s, None, None, None);
+                        p.copy_from_slice(&s.v[..width]);
+                    }
+                })
             });
         // the fully connected head on larger groups: each weight read once
         // per group
@@ -560,6 +560,27 @@ impl Cnn {
             });
         }
         Ok(())
+    }
+
+    /// Calls `f` with this thread's buffers, made for this network (kept
+    /// for the next call where they are at most [`KEPT_SCRATCH`] bytes).
+    fn with_thread_scratch<R>(&self, f: impl FnOnce(&mut Scratch) -> R) -> R {
+        thread_local! {
+            static SCRATCH: std::cell::RefCell<Option<Scratch>> =
+                const { std::cell::RefCell::new(None) };
+        }
+        let kept = 4 * self.largest * std::mem::size_of::<f32>() <= KEPT_SCRATCH;
+        SCRATCH.with(|cell| match cell.try_borrow_mut() {
+            Ok(mut slot) if kept => {
+                let s = match slot.take() {
+                    Some(s) if s.x.len() >= self.largest => slot.insert(s),
+                    _ => slot.insert(self.scratch()),
+                };
+                f(s)
+            }
+            // larger networks (or a nested call) take fresh buffers
+            _ => f(&mut self.scratch()),
+        })
     }
 
     fn scratch(&self) -> Scratch {
