@@ -65,9 +65,9 @@ impl Rows {
         self.slot.resize(n * n, EMPTY);
         self.heights.clear();
         self.heights.resize(n, 0);
+        // (the cubes ascend, so their rows do: no division per cube)
         let mut used = 0u32;
-        for &i in &occupied.index {
-            let row = i as usize / n;
+        for (row, _) in rows_and_columns(&occupied.index, n) {
             if self.slot[row] == EMPTY {
                 self.slot[row] = used;
                 self.heights[row / n] |= 1 << (row % n);
@@ -81,8 +81,7 @@ impl Rows {
         self.reaches.clear();
         self.reaches.resize(used as usize, 0);
         self.cubes.clear();
-        for (cube, &i) in occupied.index.iter().enumerate() {
-            let (row, w) = (i as usize / n, i as usize % n);
+        for (cube, (row, w)) in rows_and_columns(&occupied.index, n).enumerate() {
             // output ow sees inputs ow − pad .. ow − pad + K − 1
             let outputs = ((1u64 << K) - 1) << (w + pad) >> (K - 1);
             self.reaches[self.slot[row] as usize] |= outputs & output_bits(m);
@@ -125,6 +124,22 @@ impl Rows {
         }
         scale
     }
+}
+
+/// The (W row, column) of each cube of an `n³` grid in `index` (ascending,
+/// as [`Occupied`] holds them), the row counted up instead of divided out.
+fn rows_and_columns(index: &[u32], n: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let mut row = 0;
+    let mut row_start = 0;
+    index.iter().map(move |&i| {
+        let i = i as usize;
+        debug_assert!(i >= row_start, "cubes in ascending order");
+        while i >= row_start + n {
+            row += 1;
+            row_start += n;
+        }
+        (row, i - row_start)
+    })
 }
 
 /// `x` rounded to the nearest integer, halves to even: one `cvtss2si` on
