@@ -585,6 +585,38 @@ mod tests {
         }
     }
 
+    /// A deterministic stream of 24-bit numbers.
+    fn numbers(seed: u32) -> impl FnMut() -> u32 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            state >> 8
+        }
+    }
+
+    /// Random bytes of an `[n, n, n, cin]` input, and the same bytes with a
+    /// zero cube before and after every W row (the layout `quantize` writes
+    /// for padding 1).
+    fn input_and_padded(
+        n: usize,
+        cin: usize,
+        next: &mut impl FnMut() -> u32,
+    ) -> (Vec<u8>, Vec<u8>) {
+        let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
+        let padded = x
+            .chunks_exact(n * cin)
+            .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
+            .collect();
+        (x, padded)
+    }
+
+    /// Every output `want` and `got` agree bit for bit.
+    fn same_bits(want: &[f32], got: &[f32]) -> bool {
+        want.iter()
+            .zip(got)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    }
+
     /// A 1³ shortcut reading the bytes quantized for a 3³ convolution (W
     /// rows between one zero cube each side) gives the exact integer sums.
     #[test]
@@ -593,11 +625,7 @@ mod tests {
             eprintln!("no AVX-512 VNNI on this CPU: skipped");
             return;
         }
-        let mut state = 9u32;
-        let mut next = || {
-            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            state >> 8
-        };
+        let mut next = numbers(9);
         for (cin, cout, stride, n) in [(16, 16, 1, 21), (16, 32, 2, 21), (32, 64, 2, 11)] {
             let weight = (0..cout * cin)
                 .map(|i| ((i * 37 % 101) as f32 - 50.0) / 200.0)
@@ -615,13 +643,9 @@ mod tests {
             let q = Int8Conv::new(&f).expect("layout fits").reading_layout(1);
             assert_eq!(q.input_pad(), 1);
             let m = output_side(n, 1, stride, 0);
-            let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
-            let padded: Vec<u8> = x
-                .chunks_exact(n * cin)
-                .flat_map(|row| [&[0; 64][..cin], row, &[0; 64][..cin]].concat())
-                .collect();
+            let (x, padded) = input_and_padded(n, cin, &mut next);
             let mask: Vec<bool> = (0..m * m * m)
-                .map(|o| o % 3 != 1 && next() % 5 != 0)
+                .map(|o| o % 3 != 1 && !next().is_multiple_of(5))
                 .collect();
             let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
             let cube_mask = CubeMask::from_flags(&mask, m);
@@ -635,9 +659,7 @@ mod tests {
             // SAFETY: supported() checked the features.
             unsafe { q.run(&padded, 0.02, n, &mut got, false, true, Some(region)) };
             assert!(
-                want.iter()
-                    .zip(&got)
-                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                same_bits(&want, &got),
                 "cin {cin} cout {cout} stride {stride}"
             );
         }
@@ -649,11 +671,7 @@ mod tests {
             eprintln!("no AVX-512 VNNI on this CPU: skipped");
             return;
         }
-        let mut state = 3u32;
-        let mut next = || {
-            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            state >> 8
-        };
+        let mut next = numbers(3);
         // rows longer than the largest tile (16 → 30 cubes), odd lengths,
         // every output width the kernel has
         for (cin, cout, stride, n) in [
@@ -668,16 +686,11 @@ mod tests {
         ] {
             let q = Int8Conv::new(&conv(cin, cout, stride, cin as u32 + 5)).expect("layout fits");
             let m = output_side(n, 3, stride, 1);
-            let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
-            // the same bytes with zero cubes around every W row
-            let padded: Vec<u8> = x
-                .chunks_exact(n * cin)
-                .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
-                .collect();
+            let (x, padded) = input_and_padded(n, cin, &mut next);
             // a mask with runs and gaps, rows with nothing to compute, and
             // a back half in D the kernel need not read
             let mask: Vec<bool> = (0..m * m * m)
-                .map(|o| o / (m * m) < m / 2 && o / m % 3 != 1 && next() % 4 != 0)
+                .map(|o| o / (m * m) < m / 2 && o / m % 3 != 1 && !next().is_multiple_of(4))
                 .collect();
             let background: Vec<f32> = (0..m * m * m * cout).map(|i| i as f32).collect();
             let cube_mask = CubeMask::from_flags(&mask, m);
@@ -695,9 +708,7 @@ mod tests {
                 // SAFETY: supported() checked the features.
                 unsafe { q.run(&padded, 0.01, n, &mut got, accumulate, true, Some(region)) };
                 assert!(
-                    want.iter()
-                        .zip(&got)
-                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                    same_bits(&want, &got),
                     "cin {cin} cout {cout} stride {stride} n {n}"
                 );
                 // rows it does not read may hold anything
@@ -725,11 +736,7 @@ mod tests {
                         Some(region),
                     )
                 };
-                assert!(
-                    got.iter()
-                        .zip(&again)
-                        .all(|(a, b)| a.to_bits() == b.to_bits())
-                );
+                assert!(same_bits(&got, &again));
             }
         }
     }

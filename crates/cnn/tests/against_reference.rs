@@ -193,58 +193,57 @@ fn the_row_stem_equals_the_scatter() {
 
 #[test]
 fn the_int8_stem_is_opt_in_and_near_the_reference() {
-    let (grid, batch) = (21, 6);
-    let w = common::random_net(5, grid, [16, 32, 64]);
-    let mut cnn = Cnn::new(&w).unwrap();
-    assert!(!cnn.set_int8_stem(true), "not with f32 precision");
-    let grids: Vec<f32> = (0..batch)
-        .flat_map(|i| common::sheet_grid(700 + i as u64, grid))
-        .collect();
-    if cnn.set_precision(Precision::Int8) != Precision::Int8 || !cnn.set_row_stem(true) {
-        eprintln!("no AVX-512 VNNI on this CPU: no int8 stem (checked), rest skipped");
-        assert!(!cnn.set_int8_stem(true));
+    let Some(mut cnn) = int8_option_near_the_reference(5, "stem", |cnn, on| {
+        cnn.set_row_stem(true);
+        cnn.set_int8_stem(on)
+    }) else {
         return;
-    }
-    let mut blocks = vec![0.0f32; batch * 18];
-    assert!(!cnn.set_int8_stem(false));
-    cnn.forward(&grids, &mut blocks).unwrap();
-    let mut out = vec![0.0f32; batch * 18];
-    assert!(cnn.set_int8_stem(true));
-    cnn.forward(&grids, &mut out).unwrap();
-    assert_ne!(out, blocks, "the int8 stem did not run");
-    let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
-    println!("int8 with the int8 stem vs f64: largest output difference {worst:e}");
-    assert!(worst < INT8_TOLERANCE, "int8 stem off by {worst}");
+    };
     // the row stem off: the scatter stem in f32
     assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
 }
 
 #[test]
 fn the_int8_shortcuts_run_only_with_int8_and_stay_near_the_reference() {
-    let (grid, batch) = (21, 6);
-    let w = common::random_net(6, grid, [16, 32, 64]);
-    let mut cnn = Cnn::new(&w).unwrap();
-    assert!(!cnn.set_int8_shortcut(true), "not with f32 precision");
-    let grids: Vec<f32> = (0..batch)
-        .flat_map(|i| common::sheet_grid(800 + i as u64, grid))
-        .collect();
-    if cnn.set_precision(Precision::Int8) != Precision::Int8 {
-        eprintln!("no AVX-512 VNNI on this CPU: no int8 shortcuts (checked), rest skipped");
-        assert!(!cnn.set_int8_shortcut(true));
+    let Some(mut cnn) = int8_option_near_the_reference(6, "shortcuts", Cnn::set_int8_shortcut)
+    else {
         return;
-    }
-    let mut f32_shortcuts = vec![0.0f32; batch * 18];
-    assert!(!cnn.set_int8_shortcut(false));
-    cnn.forward(&grids, &mut f32_shortcuts).unwrap();
-    let mut out = vec![0.0f32; batch * 18];
-    assert!(cnn.set_int8_shortcut(true));
-    cnn.forward(&grids, &mut out).unwrap();
-    assert_ne!(out, f32_shortcuts, "the int8 shortcuts did not run");
-    let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
-    println!("int8 with int8 shortcuts vs f64: largest output difference {worst:e}");
-    assert!(worst < INT8_TOLERANCE, "int8 shortcuts off by {worst}");
+    };
     cnn.set_precision(Precision::F32);
     assert!(!cnn.set_int8_shortcut(true), "f32 precision again");
+}
+
+/// An int8 option (`set(cnn, on)`, returning whether it is in effect)
+/// does nothing with f32 precision; with int8 it changes the outputs and
+/// keeps them within [`INT8_TOLERANCE`] of the f64 reference. Returns the
+/// network with int8 and the option on, or `None` on a CPU without VNNI.
+fn int8_option_near_the_reference(
+    seed: u64,
+    what: &str,
+    set: impl Fn(&mut Cnn, bool) -> bool,
+) -> Option<Cnn> {
+    let (grid, batch) = (21, 6);
+    let w = common::random_net(seed, grid, [16, 32, 64]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    assert!(!set(&mut cnn, true), "int8 {what} not with f32 precision");
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(100 * seed + i as u64, grid))
+        .collect();
+    if cnn.set_precision(Precision::Int8) != Precision::Int8 || !set(&mut cnn, true) {
+        eprintln!("no AVX-512 VNNI on this CPU: no int8 {what} (checked), rest skipped");
+        return None;
+    }
+    let mut without = vec![0.0f32; batch * 18];
+    assert!(!set(&mut cnn, false));
+    cnn.forward(&grids, &mut without).unwrap();
+    let mut out = vec![0.0f32; batch * 18];
+    assert!(set(&mut cnn, true));
+    cnn.forward(&grids, &mut out).unwrap();
+    assert_ne!(out, without, "the int8 {what} did not run");
+    let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
+    println!("int8 with the int8 {what} vs f64: largest output difference {worst:e}");
+    assert!(worst < INT8_TOLERANCE, "int8 {what} off by {worst}");
+    Some(cnn)
 }
 
 #[test]
