@@ -37,6 +37,12 @@ fn forward(c: &mut Criterion) {
                 g.bench_function(format!("batch{batch}_int8_stem_sparse"), |b| {
                     b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
                 });
+                // and the shortcuts in int8: every default of `normalnet denoise`
+                if cnn.set_int8_shortcut(true) {
+                    g.bench_function(format!("batch{batch}_int8_all_sparse"), |b| {
+                        b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
+                    });
+                }
             }
         }
         g.finish();
