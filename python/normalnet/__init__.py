@@ -19,6 +19,7 @@ Rust library's message. The work runs with the GIL released.
 from __future__ import annotations
 
 import json
+import math
 import os
 import struct
 import time
@@ -92,7 +93,11 @@ def _params_json(params: Dict[str, Any]) -> str:
             return os.fspath(x)
         return x
 
-    return json.dumps({k: plain(v) for k, v in params.items()})
+    plain_params = {k: plain(v) for k, v in params.items()}
+    for k, v in plain_params.items():
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ValueError(f"parameter `{k}` = {v}: not a finite number")
+    return json.dumps(plain_params)
 
 
 def denoise_report(

@@ -48,6 +48,8 @@ def test_bad_arrays_are_clear_value_errors(example):
         normalnet.denoise(v, f, "gnf", mu=0.3)
     with pytest.raises(ValueError, match="mu_g"):
         normalnet.denoise(v, f, "gnf", mu_g=-1.0)
+    with pytest.raises(ValueError, match="`mu_g` = nan: not a finite number"):
+        normalnet.denoise(v, f, "gnf", mu_g=float("nan"))
     with pytest.raises(ValueError, match="ground truth"):
         normalnet.denoise(v, f, "oracle")
     with pytest.raises(OSError, match="no-such.obj"):

@@ -287,6 +287,14 @@ fn parameters_out_of_range_are_refused_with_their_name() {
             &["--auto-stop", "inf"],
             &["--auto-stop", "must be a finite number"],
         ),
+        (
+            &["-p", "mu_g=nan"],
+            &["`mu_g` = nan", "not a finite number"],
+        ),
+        (
+            &["--no-switch", "-p", "gnf_after=100000000"],
+            &["gnf_after", "at most 100000"],
+        ),
     ];
     for (flags, want) in cases {
         let mut args = vec!["denoise", s(&input), s(&out)];

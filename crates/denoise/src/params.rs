@@ -3,8 +3,10 @@
 //! the fields they want to change (CLI flags, `--param key=value`, bench
 //! settings, Python keyword arguments all become one), which is laid over
 //! the defaults key by key. Unknown keys and wrong types are errors naming
-//! the parameter and listing the known ones, and every pass count (a field
-//! named `*iterations`) is bounded by [`MAX_ITERATIONS`].
+//! the parameter and listing the known ones, a number given as something
+//! else (`nan`, `inf`, a word) is named with what was expected, and every
+//! pass count (a field named `*iterations`, or one of [`OTHER_PASS_COUNTS`])
+//! is bounded by [`MAX_ITERATIONS`].
 
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -19,6 +21,14 @@ pub type Params = Map<String, Value>;
 /// 5 to 40): far beyond any useful count, and a typo or a `-1` cast to
 /// unsigned (18446744073709551615) is refused instead of running forever.
 pub const MAX_ITERATIONS: u64 = 100_000;
+
+/// Pass counts whose names do not end in `iterations`.
+pub const OTHER_PASS_COUNTS: [&str; 1] = ["gnf_after"];
+
+/// Whether parameter `key` counts passes (bounded by [`MAX_ITERATIONS`]).
+fn is_pass_count(key: &str) -> bool {
+    key.ends_with("iterations") || OTHER_PASS_COUNTS.contains(&key)
+}
 
 /// The defaults of `P` as a JSON object.
 pub fn defaults_of<P: Default + Serialize>() -> Value {
@@ -47,7 +57,17 @@ pub fn resolve<P: Default + Serialize + DeserializeOwned>(
                 known.join(", ")
             )));
         }
-        if key.ends_with("iterations")
+        // JSON has no NaN or infinity: `-p mu_g=nan` arrives as a string
+        if let (Some(default), Value::String(text)) = (fields.get(key), v)
+            && default.is_number()
+        {
+            let what = match text.parse::<f64>() {
+                Ok(_) => "not a finite number",
+                Err(_) => "expected a number",
+            };
+            return Err(bad(format!("`{key}` = {text}: {what}")));
+        }
+        if is_pass_count(key)
             && let Some(n) = v.as_u64()
             && n > MAX_ITERATIONS
         {
@@ -113,10 +133,28 @@ mod tests {
         let mut wrong = Params::new();
         wrong.insert("mu_g".into(), "wide".into());
         let e = resolve::<GnfParams>("gnf", &wrong).unwrap_err().to_string();
+        assert!(e.contains("`mu_g` = wide: expected a number"), "{e}");
+        let mut wrong = Params::new();
+        wrong.insert("fold_guard".into(), 3.into());
+        let e = resolve::<GnfParams>("gnf", &wrong).unwrap_err().to_string();
         assert!(
-            e.starts_with("gnf: bad parameter value") && e.contains("mu_g"),
+            e.starts_with("gnf: bad parameter value") && e.contains("fold_guard"),
             "{e}"
         );
+    }
+
+    /// Audit: `-p mu_g=nan` said "invalid type: string \"nan\", expected f64".
+    #[test]
+    fn non_finite_numbers_are_named() {
+        for text in ["nan", "inf", "-inf", "NaN"] {
+            let (key, v) = parse_assignment(&format!("mu_g={text}")).unwrap();
+            let given = Params::from_iter([(key, v)]);
+            let e = resolve::<GnfParams>("gnf", &given).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("`mu_g` = {text}: not a finite number")),
+                "{e}"
+            );
+        }
     }
 
     /// Audit: `--vertex-iterations 18446744073709551615` ran forever.
@@ -131,6 +169,16 @@ mod tests {
             e.contains("`vertex_iterations` = 18446744073709551615: at most 100000"),
             "{e}"
         );
+    }
+
+    /// Audit: `-p gnf_after=100000000` (NormalNet) ran GNF for hours.
+    #[test]
+    fn gnf_after_is_a_bounded_pass_count() {
+        let given = Params::from_iter([("gnf_after".to_string(), Value::from(100_000_000u64))]);
+        let e = resolve::<crate::normalnet::NormalnetParams>("normalnet", &given)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`gnf_after` = 100000000: at most 100000"), "{e}");
     }
 
     #[test]
