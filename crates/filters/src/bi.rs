@@ -25,7 +25,7 @@
 //!    `W_r(x) = exp(−x²/(2σ_r²))`, `N(i)` the vertex-1-ring of face i.
 //!
 //! Each normal pass is followed by `N_v` passes of the Sun et al. (2007)
-//! vertex update ([`Schedule::Interleaved`]).
+//! vertex update ([`Schedule::Interleaved`](crate::driver::Schedule::Interleaved)).
 //!
 //! Simplifications (documented deviations from the paper):
 //! - The paper first clusters the faces into piecewise-smooth patches and
@@ -44,7 +44,7 @@
 //!   mean E_a of 7.2°, 10 passes 7.4°).
 
 use crate::bilateral::bilateral_normals;
-use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
+use crate::driver::{NormalFilter, Passes, run_filter};
 use crate::error::{FilterError, check_range};
 use crate::stats::spatial_sigma;
 use normalnet_mesh::vec3::{self, Vec3};
@@ -183,15 +183,11 @@ pub fn bi(mesh: &Mesh, params: &BiParams, progress: &dyn Progress) -> Result<Mes
         &mut filter,
         mesh,
         &topology,
-        Passes {
-            normal_iterations: params.normal_iterations,
-            vertex_iterations: params.vertex_iterations,
-            schedule: Schedule::Interleaved,
-            fix_boundary: params.fix_boundary,
-            fold_guard: params
-                .fold_guard
-                .then_some(crate::vertex_update::FOLD_GUARD_COS),
-        },
+        Passes::interleaved(
+            [params.normal_iterations, params.vertex_iterations],
+            params.fix_boundary,
+            params.fold_guard,
+        ),
         "BI",
         progress,
     ))

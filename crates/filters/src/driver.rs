@@ -56,6 +56,25 @@ pub struct Passes {
     pub fold_guard: Option<f64>,
 }
 
+impl Passes {
+    /// N_f normal passes, each followed by N_v vertex passes, with the
+    /// standard fold guard ([`crate::vertex_update::FOLD_GUARD_COS`]) when
+    /// `fold_guard`: the schedule of most methods.
+    pub fn interleaved(
+        [normal_iterations, vertex_iterations]: [usize; 2],
+        fix_boundary: bool,
+        fold_guard: bool,
+    ) -> Passes {
+        Passes {
+            normal_iterations,
+            vertex_iterations,
+            schedule: Schedule::Interleaved,
+            fix_boundary,
+            fold_guard: fold_guard.then_some(crate::vertex_update::FOLD_GUARD_COS),
+        }
+    }
+}
+
 /// Runs `filter` on `mesh` with the passes of `passes`. Reports one progress
 /// unit per normal pass under `label`.
 pub fn run_filter(

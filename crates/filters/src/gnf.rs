@@ -22,12 +22,12 @@
 //!   normal, normalised. Ties keep the first patch in the order
 //!   `f_i, ring(f_i)` (increasing face index). Recomputed every pass.
 //! - Reference defaults: `μ_g = 0.35`, 20 normal passes, each followed by 10
-//!   vertex passes ([`Schedule::Interleaved`]).
+//!   vertex passes ([`Schedule::Interleaved`](crate::driver::Schedule::Interleaved)).
 //!
 //! When the mesh has no edge-adjacent face pair (`d_s = 0`) a pass returns
 //! the input normals unchanged instead of dividing by zero.
 
-use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
+use crate::driver::{NormalFilter, Passes, run_filter};
 use crate::error::{FilterError, check_range};
 use crate::stats::{mean_centre_distance, spatial_sigma};
 use normalnet_mesh::geometry::face_centres;
@@ -310,15 +310,11 @@ pub fn gnf(mesh: &Mesh, params: &GnfParams, progress: &dyn Progress) -> Result<M
         &mut filter,
         mesh,
         &topology,
-        Passes {
-            normal_iterations: params.normal_iterations,
-            vertex_iterations: params.vertex_iterations,
-            schedule: Schedule::Interleaved,
-            fix_boundary: false,
-            fold_guard: params
-                .fold_guard
-                .then_some(crate::vertex_update::FOLD_GUARD_COS),
-        },
+        Passes::interleaved(
+            [params.normal_iterations, params.vertex_iterations],
+            false,
+            params.fold_guard,
+        ),
         "GNF",
         progress,
     ))

@@ -16,7 +16,7 @@
 //! mesh (neighbourhood and `d_s` rebuilt from it, as the training targets
 //! are), then `N_v` vertex updates.
 
-use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
+use crate::driver::{NormalFilter, Passes, run_filter};
 use crate::error::{FilterError, check_range};
 use crate::gnf::radius_neighbourhood;
 use crate::stats::mean_centre_distance;
@@ -255,13 +255,7 @@ pub fn gt_guided_gnf(
         mu_g: params.mu_g,
         sigma_s_over_ds: params.sigma_s_over_ds,
     };
-    let passes = Passes {
-        normal_iterations: params.iterations,
-        vertex_iterations: params.vertex_iterations,
-        schedule: Schedule::Interleaved,
-        fix_boundary: false,
-        fold_guard: None,
-    };
+    let passes = Passes::interleaved([params.iterations, params.vertex_iterations], false, false);
     Ok(run_filter(
         &mut filter,
         mesh,

@@ -124,13 +124,12 @@ pub fn sun07(
         mesh,
         &topology,
         Passes {
-            normal_iterations: params.normal_iterations,
-            vertex_iterations: params.vertex_iterations,
             schedule: params.schedule,
-            fix_boundary: params.fix_boundary,
-            fold_guard: params
-                .fold_guard
-                .then_some(crate::vertex_update::FOLD_GUARD_COS),
+            ..Passes::interleaved(
+                [params.normal_iterations, params.vertex_iterations],
+                params.fix_boundary,
+                params.fold_guard,
+            )
         },
         "Sun07",
         progress,

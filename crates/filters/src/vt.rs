@@ -26,7 +26,7 @@
 //!    eigenvector oriented like `Σ_j w_j n_j` is used instead.
 //!
 //! Each normal pass is followed by `N_v` passes of the vertex update
-//! ([`Schedule::Interleaved`]), repeated `N_f` times.
+//! ([`Schedule::Interleaved`](crate::driver::Schedule::Interleaved)), repeated `N_f` times.
 //!
 //! Deviations (documented): the paper's vertex update adds an edge-face
 //! normal term to the Sun et al. (2007) update to avoid flips; here the
@@ -39,7 +39,7 @@
 //! E_a 6.9° against 8.1° with 10 passes and 9.9° with 20); no test model
 //! was used for any choice.
 
-use crate::driver::{NormalFilter, Passes, Schedule, run_filter};
+use crate::driver::{NormalFilter, Passes, run_filter};
 use crate::error::{FilterError, check_range};
 use crate::gnf::radius_neighbourhood;
 use crate::stats::mean_edge_length;
@@ -268,15 +268,11 @@ pub fn vt(mesh: &Mesh, params: &VtParams, progress: &dyn Progress) -> Result<Mes
         &mut filter,
         mesh,
         &topology,
-        Passes {
-            normal_iterations: params.normal_iterations,
-            vertex_iterations: params.vertex_iterations,
-            schedule: Schedule::Interleaved,
-            fix_boundary: params.fix_boundary,
-            fold_guard: params
-                .fold_guard
-                .then_some(crate::vertex_update::FOLD_GUARD_COS),
-        },
+        Passes::interleaved(
+            [params.normal_iterations, params.vertex_iterations],
+            params.fix_boundary,
+            params.fold_guard,
+        ),
         "VT",
         progress,
     ))
