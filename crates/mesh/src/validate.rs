@@ -162,24 +162,12 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
 
     // Union-find over vertices through face corners.
     let mut parent: Vec<u32> = (0..mesh.num_vertices() as u32).collect();
-    fn find(parent: &mut [u32], mut x: u32) -> u32 {
-        while parent[x as usize] != x {
-            parent[x as usize] = parent[parent[x as usize] as usize];
-            x = parent[x as usize];
-        }
-        x
-    }
     for t in &mesh.faces {
-        let a = find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = find(&mut parent, v);
-            if a != b {
-                parent[b as usize] = a;
-            }
-        }
+        join(&mut parent, t[0], t[1]);
+        join(&mut parent, t[0], t[2]);
     }
     let components = (0..mesh.num_vertices() as u32)
-        .filter(|&v| used[v as usize] && find(&mut parent, v) == v)
+        .filter(|&v| used[v as usize] && root(&mut parent, v) == v)
         .count();
 
     let misoriented = misoriented_edges(&mesh.faces, topo);
@@ -224,6 +212,26 @@ pub fn validate_with(mesh: &Mesh, topo: &Topology) -> MeshReport {
     }
 }
 
+/// The root of `x`'s set in the union-find forest `parent` (a root is its
+/// own parent), halving the path on the way.
+fn root(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        parent[x as usize] = parent[parent[x as usize] as usize];
+        x = parent[x as usize];
+    }
+    x
+}
+
+/// Joins the sets of `a` and `b` (`b`'s root under `a`'s); whether they
+/// were apart.
+fn join(parent: &mut [u32], a: u32, b: u32) -> bool {
+    let (a, b) = (root(parent, a), root(parent, b));
+    if a != b {
+        parent[b as usize] = a;
+    }
+    a != b
+}
+
 /// Non-manifold ("bow-tie") vertices, increasing: vertices whose incident
 /// faces fall into more than one group when faces sharing an edge at the
 /// vertex are joined. A vertex on a boundary is manifold if its faces form a
@@ -255,21 +263,10 @@ pub fn non_manifold_vertices(faces: &[[u32; 3]], topo: &Topology) -> Vec<u32> {
             }
             links.sort_unstable();
             let mut parent: Vec<u32> = (0..incident.len() as u32).collect();
-            fn find(parent: &mut [u32], mut x: u32) -> u32 {
-                while parent[x as usize] != x {
-                    parent[x as usize] = parent[parent[x as usize] as usize];
-                    x = parent[x as usize];
-                }
-                x
-            }
             let mut groups = incident.len();
             for pair in links.windows(2) {
-                if pair[0].0 == pair[1].0 {
-                    let (a, b) = (find(&mut parent, pair[0].1), find(&mut parent, pair[1].1));
-                    if a != b {
-                        parent[b as usize] = a;
-                        groups -= 1;
-                    }
+                if pair[0].0 == pair[1].0 && join(&mut parent, pair[0].1, pair[1].1) {
+                    groups -= 1;
                 }
             }
             (groups > 1).then_some(v)
