@@ -418,17 +418,10 @@ impl Voxelizer {
             faces.len() * grid_len,
             "batch buffer must hold faces.len() grids"
         );
-        if let Some(y) = yaws {
-            assert_eq!(y.len(), faces.len(), "one yaw per face");
-        }
-        out.par_chunks_mut(grid_len)
-            .zip(faces.par_iter())
-            .enumerate()
-            .map_init(Scratch::new, |scratch, (idx, (grid, &f))| {
-                let yaw = yaws.map_or(0.0, |y| y[idx]);
-                self.voxelize_face_with(scratch, f as usize, yaw, grid)
-            })
-            .collect()
+        let grids = out.par_chunks_mut(grid_len);
+        per_face(faces, yaws, grids, |scratch, f, yaw, grid| {
+            self.voxelize_face_with(scratch, f, yaw, grid)
+        })
     }
 
     /// [`Self::voxelize_batch_yaw`] into sparse grids: `out` is resized to
@@ -442,19 +435,35 @@ impl Voxelizer {
         yaws: Option<&[f64]>,
         out: &mut Vec<SparseGrid>,
     ) -> Vec<Frame> {
-        if let Some(y) = yaws {
-            assert_eq!(y.len(), faces.len(), "one yaw per face");
-        }
         out.resize_with(faces.len(), SparseGrid::default);
-        out.par_iter_mut()
-            .zip(faces.par_iter())
-            .enumerate()
-            .map_init(Scratch::new, |scratch, (idx, (grid, &f))| {
-                let yaw = yaws.map_or(0.0, |y| y[idx]);
-                self.voxelize_face_sparse(scratch, f as usize, yaw, grid)
-            })
-            .collect()
+        per_face(faces, yaws, out.par_iter_mut(), |scratch, f, yaw, grid| {
+            self.voxelize_face_sparse(scratch, f, yaw, grid)
+        })
     }
+}
+
+/// `voxelize(scratch, face, yaw, grid)` for every face of `faces` (in
+/// parallel, one scratch per worker) into the grid of the same position in
+/// `grids`, with its yaw of `yaws` (or 0); the faces' frames.
+///
+/// # Panics
+/// If `yaws` has the wrong length.
+fn per_face<G: Send>(
+    faces: &[u32],
+    yaws: Option<&[f64]>,
+    grids: impl IndexedParallelIterator<Item = G>,
+    voxelize: impl Fn(&mut Scratch, usize, f64, G) -> Frame + Sync + Send,
+) -> Vec<Frame> {
+    if let Some(y) = yaws {
+        assert_eq!(y.len(), faces.len(), "one yaw per face");
+    }
+    grids
+        .zip(faces.par_iter())
+        .enumerate()
+        .map_init(Scratch::new, |scratch, (idx, (grid, &f))| {
+            voxelize(scratch, f as usize, yaws.map_or(0.0, |y| y[idx]), grid)
+        })
+        .collect()
 }
 
 /// The non-empty cubes of one grid: what the dense `[3, D, H, W]` grid
