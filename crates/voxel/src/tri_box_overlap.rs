@@ -240,6 +240,23 @@ impl CubeTester {
         cells.reserve(most + 8);
         let mut len = cells.len();
         let mut ks = [0u32; 8];
+        // a triangle spanning at most 4 rows j: 8 / L columns per vector,
+        // L = the span rounded up to a power of two
+        let span = j_end - range[1].0;
+        let few_rows = (span <= 4).then(|| {
+            let l = span.next_power_of_two() as i32;
+            let row = _mm256_and_si256(int_lanes, _mm256_set1_epi32(l - 1));
+            FewRows {
+                columns: 8 / l as usize,
+                column: _mm256_srlv_epi32(int_lanes, _mm256_set1_epi32(l.trailing_zeros() as i32)),
+                rows: _mm256_cmplt_epi32_mask(row, _mm256_set1_epi32(span as i32)),
+                y: _mm512_cvtepi32_pd(_mm256_add_epi32(row, _mm256_set1_epi32(range[1].0 as i32))),
+                offset: _mm256_mullo_epi32(
+                    _mm256_add_epi32(row, _mm256_set1_epi32(range[1].0 as i32)),
+                    _mm256_set1_epi32(side as i32),
+                ),
+            }
+        });
         for i in range[0].0..=range[0].1 {
             let x = i as f64;
             for k0 in (range[2].0..k_end).step_by(8) {
@@ -257,35 +274,46 @@ impl CubeTester {
                 unsafe {
                     _mm256_mask_compressstoreu_epi32(ks.as_mut_ptr().cast(), columns, ks_vec)
                 };
-                for &k in &ks[..columns.count_ones() as usize] {
+                let count = columns.count_ones() as usize;
+                if let Some(few) = &few_rows {
+                    // SAFETY: `ks` holds 8 lanes.
+                    let ks_vec = unsafe { _mm256_loadu_si256(ks.as_ptr().cast()) };
+                    for g in (0..count).step_by(few.columns) {
+                        // lane l: column g + l / L of the kept ones, row
+                        // j0 + l % L
+                        let column = _mm256_add_epi32(_mm256_set1_epi32(g as i32), few.column);
+                        let k = _mm256_permutexvar_epi32(
+                            _mm256_min_epi32(column, _mm256_set1_epi32(7)),
+                            ks_vec,
+                        );
+                        let z = _mm512_cvtepi32_pd(k);
+                        let cubes = few.rows
+                            & _mm256_cmplt_epi32_mask(column, _mm256_set1_epi32(count as i32));
+                        let cubes = cubes & self.row_tests(x, few.y, z);
+                        let cell = _mm256_add_epi32(
+                            _mm256_add_epi32(
+                                _mm256_set1_epi32((i * side * side) as i32),
+                                few.offset,
+                            ),
+                            k,
+                        );
+                        debug_assert!(len + 8 <= cells.capacity());
+                        // SAFETY: as below.
+                        unsafe {
+                            _mm256_storeu_si256(
+                                cells.as_mut_ptr().add(len).cast(),
+                                _mm256_maskz_compress_epi32(cubes, cell),
+                            )
+                        };
+                        len += cubes.count_ones() as usize;
+                    }
+                    continue;
+                }
+                for &k in &ks[..count] {
                     let (k, z) = (k as usize, f64::from(k));
                     for j0 in (range[1].0..j_end).step_by(8) {
-                        let (y, mut cubes) = eight(j0, j_end);
-                        // the plane: ((n0·x + n1·y) + n2·z); NaN compares
-                        // false in both forms (not separated)
-                        let np = _mm512_add_pd(
-                            _mm512_add_pd(splat(self.n[0] * x), _mm512_mul_pd(splat(self.n[1]), y)),
-                            splat(self.n[2] * z),
-                        );
-                        let product = _mm512_mul_pd(
-                            _mm512_add_pd(np, splat(self.d1)),
-                            _mm512_add_pd(np, splat(self.d2)),
-                        );
-                        cubes &= !_mm512_cmp_pd_mask::<_CMP_GT_OQ>(product, zero);
-                        for [a, b, d] in self.xy {
-                            let v = _mm512_add_pd(
-                                _mm512_add_pd(splat(a * x), _mm512_mul_pd(splat(b), y)),
-                                splat(d),
-                            );
-                            cubes &= _mm512_cmp_pd_mask::<_CMP_GE_OQ>(v, zero);
-                        }
-                        for [a, b, d] in self.yz {
-                            let v = _mm512_add_pd(
-                                _mm512_add_pd(_mm512_mul_pd(splat(a), y), splat(b * z)),
-                                splat(d),
-                            );
-                            cubes &= _mm512_cmp_pd_mask::<_CMP_GE_OQ>(v, zero);
-                        }
+                        let (y, cubes) = eight(j0, j_end);
+                        let cubes = cubes & self.row_tests(x, y, splat(z));
                         // cells (i·side + j)·side + k of the hits, stored
                         // side by side
                         let first = ((i * side + j0) * side + k) as i32;
@@ -311,6 +339,49 @@ impl CubeTester {
         unsafe { cells.set_len(len) };
     }
 
+    /// Of eight cubes (`x`, `y`, `z`) of a column that passed the zx tests,
+    /// those that pass the plane and the xy and yz tests: the products and
+    /// sums of [`Self::overlaps_ij_jk`] in the same order (NaN compares
+    /// false in both forms: not separated).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl")]
+    #[inline]
+    fn row_tests(
+        &self,
+        x: f64,
+        y: std::arch::x86_64::__m512d,
+        z: std::arch::x86_64::__m512d,
+    ) -> u8 {
+        use std::arch::x86_64::*;
+        let splat = _mm512_set1_pd;
+        let zero = _mm512_setzero_pd();
+        // the plane: ((n0·x + n1·y) + n2·z)
+        let np = _mm512_add_pd(
+            _mm512_add_pd(splat(self.n[0] * x), _mm512_mul_pd(splat(self.n[1]), y)),
+            _mm512_mul_pd(splat(self.n[2]), z),
+        );
+        let product = _mm512_mul_pd(
+            _mm512_add_pd(np, splat(self.d1)),
+            _mm512_add_pd(np, splat(self.d2)),
+        );
+        let mut cubes = !_mm512_cmp_pd_mask::<_CMP_GT_OQ>(product, zero);
+        for [a, b, d] in self.xy {
+            let v = _mm512_add_pd(
+                _mm512_add_pd(splat(a * x), _mm512_mul_pd(splat(b), y)),
+                splat(d),
+            );
+            cubes &= _mm512_cmp_pd_mask::<_CMP_GE_OQ>(v, zero);
+        }
+        for [a, b, d] in self.yz {
+            let v = _mm512_add_pd(
+                _mm512_add_pd(_mm512_mul_pd(splat(a), y), _mm512_mul_pd(splat(b), z)),
+                splat(d),
+            );
+            cubes &= _mm512_cmp_pd_mask::<_CMP_GE_OQ>(v, zero);
+        }
+        cubes
+    }
+
     /// Full test of cube `(i, j, k)` (bounding box included).
     pub fn overlaps(&self, i: usize, j: usize, k: usize) -> bool {
         let p = [i as f64, j as f64, k as f64];
@@ -318,6 +389,23 @@ impl CubeTester {
             && self.overlaps_zx(i, k)
             && self.overlaps_ij_jk(i, j, k)
     }
+}
+
+/// For [`CubeTester::overlapped_cells`]: a triangle whose cubes span at most
+/// 4 rows j tests several columns k per vector, `L` lanes each (its span
+/// rounded up to a power of two).
+#[cfg(target_arch = "x86_64")]
+struct FewRows {
+    /// columns per vector: 8 / L
+    columns: usize,
+    /// per lane: its column in the group, lane / L
+    column: std::arch::x86_64::__m256i,
+    /// the lanes whose row is in the span (lane % L < span)
+    rows: u8,
+    /// per lane: its row j as f64
+    y: std::arch::x86_64::__m512d,
+    /// per lane: j · side
+    offset: std::arch::x86_64::__m256i,
 }
 
 #[cfg(test)]
@@ -466,13 +554,14 @@ mod tests {
         assert!(hits > tested / 50, "{hits}/{tested}");
     }
 
-    /// The cubes found eight at a time are those the single tests find,
+    /// The cubes found eight at a time (several columns at a time for
+    /// triangles spanning few rows) are those the single tests find,
     /// in the same order, on the voxelizer's kind of triangles and on
     /// flat, degenerate and NaN ones.
     #[test]
     fn overlapped_cells_equal_single_tests() {
         let mut rng = ChaCha8Rng::seed_from_u64(12);
-        let mut hits = 0;
+        let (mut hits, mut few) = (0, 0);
         for case in 0..4000 {
             let size = rng.random_range(0.2..12.0);
             let base = [0; 3].map(|_| rng.random_range(1.0..20.0));
@@ -494,8 +583,11 @@ mod tests {
             t.overlapped_cells_plain(range, 21, &mut plain);
             assert_eq!(fast, plain, "{tri:?}");
             hits += plain.len() - 1;
+            // spans of at most 4 rows j: several columns per vector
+            few += usize::from(range[1].1 - range[1].0 < 4);
         }
         assert!(hits > 100_000, "{hits}");
+        assert!(few > 400, "{few} triangles of at most 4 rows");
     }
 
     #[test]
