@@ -297,15 +297,9 @@ impl CubeTester {
                             ),
                             k,
                         );
-                        debug_assert!(len + 8 <= cells.capacity());
-                        // SAFETY: as below.
-                        unsafe {
-                            _mm256_storeu_si256(
-                                cells.as_mut_ptr().add(len).cast(),
-                                _mm256_maskz_compress_epi32(cubes, cell),
-                            )
-                        };
-                        len += cubes.count_ones() as usize;
+                        // SAFETY: at most `most` hits in all, capacity
+                        // `most + 8`: room for a whole vector after them.
+                        unsafe { append_hits(cells, &mut len, cubes, cell) };
                     }
                     continue;
                 }
@@ -321,16 +315,9 @@ impl CubeTester {
                             _mm256_set1_epi32(first),
                             _mm256_mullo_epi32(int_lanes, _mm256_set1_epi32(side as i32)),
                         );
-                        debug_assert!(len + 8 <= cells.capacity());
                         // SAFETY: at most `most` hits in all, capacity
                         // `most + 8`: room for a whole vector after them.
-                        unsafe {
-                            _mm256_storeu_si256(
-                                cells.as_mut_ptr().add(len).cast(),
-                                _mm256_maskz_compress_epi32(cubes, cell),
-                            )
-                        };
-                        len += cubes.count_ones() as usize;
+                        unsafe { append_hits(cells, &mut len, cubes, cell) };
                     }
                 }
             }
@@ -389,6 +376,32 @@ impl CubeTester {
             && self.overlaps_zx(i, k)
             && self.overlaps_ij_jk(i, j, k)
     }
+}
+
+/// Writes the cells of `cell` whose bit is set in `cubes` side by side at
+/// `cells[*len..]` (a whole vector written) and counts them into `len`.
+///
+/// # Safety
+/// The CPU has AVX-512 F and VL, and `*len + 8 <= cells.capacity()`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl")]
+#[inline]
+unsafe fn append_hits(
+    cells: &mut Vec<u32>,
+    len: &mut usize,
+    cubes: u8,
+    cell: std::arch::x86_64::__m256i,
+) {
+    use std::arch::x86_64::*;
+    debug_assert!(*len + 8 <= cells.capacity());
+    // SAFETY: room for 8 lanes at `len` (the caller's promise).
+    unsafe {
+        _mm256_storeu_si256(
+            cells.as_mut_ptr().add(*len).cast(),
+            _mm256_maskz_compress_epi32(cubes, cell),
+        )
+    };
+    *len += cubes.count_ones() as usize;
 }
 
 /// For [`CubeTester::overlapped_cells`]: a triangle whose cubes span at most
