@@ -246,15 +246,13 @@ impl CubeTester {
         let few_rows = (span <= 4).then(|| {
             let l = span.next_power_of_two() as i32;
             let row = _mm256_and_si256(int_lanes, _mm256_set1_epi32(l - 1));
+            let j = _mm256_add_epi32(row, _mm256_set1_epi32(range[1].0 as i32));
             FewRows {
                 columns: 8 / l as usize,
                 column: _mm256_srlv_epi32(int_lanes, _mm256_set1_epi32(l.trailing_zeros() as i32)),
                 rows: _mm256_cmplt_epi32_mask(row, _mm256_set1_epi32(span as i32)),
-                y: _mm512_cvtepi32_pd(_mm256_add_epi32(row, _mm256_set1_epi32(range[1].0 as i32))),
-                offset: _mm256_mullo_epi32(
-                    _mm256_add_epi32(row, _mm256_set1_epi32(range[1].0 as i32)),
-                    _mm256_set1_epi32(side as i32),
-                ),
+                y: _mm512_cvtepi32_pd(j),
+                offset: _mm256_mullo_epi32(j, _mm256_set1_epi32(side as i32)),
             }
         });
         for i in range[0].0..=range[0].1 {
