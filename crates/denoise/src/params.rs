@@ -77,15 +77,31 @@ pub fn resolve<P: Default + Serialize + DeserializeOwned>(
         }
         fields.insert(key.clone(), v.clone());
     }
-    serde_json::from_value(value).map_err(|e| {
-        // serde names the type ("invalid type: string, expected f64"); add
-        // which of the given keys it could be
-        let keys: Vec<&str> = given.keys().map(String::as_str).collect();
-        bad(format!(
-            "bad parameter value ({e}; given: {})",
-            keys.join(", ")
-        ))
-    })
+    serde_json::from_value(value).map_err(|e| bad(blame::<P>(given, e)))
+}
+
+/// Which given key serde refused, and why: each is tried alone over the
+/// defaults (serde names the type, "invalid type: string, expected a
+/// boolean", not the field).
+fn blame<P: Default + Serialize + DeserializeOwned>(
+    given: &Params,
+    whole: serde_json::Error,
+) -> String {
+    for (key, v) in given {
+        let mut one = defaults_of::<P>();
+        if let Some(fields) = one.as_object_mut() {
+            fields.insert(key.clone(), v.clone());
+        }
+        if let Err(e) = serde_json::from_value::<P>(one) {
+            let shown = match v {
+                Value::String(text) => text.clone(),
+                _ => v.to_string(),
+            };
+            return format!("bad parameter value `{key}` = {shown}: {e}");
+        }
+    }
+    let keys: Vec<&str> = given.keys().map(String::as_str).collect();
+    format!("bad parameter value ({whole}; given: {})", keys.join(", "))
 }
 
 /// `KEY=VALUE` → (key, value): the value as JSON when it parses as JSON
@@ -155,6 +171,27 @@ mod tests {
                 "{e}"
             );
         }
+    }
+
+    /// Audit: `-p freeze_deg=0.5 -p fold_guard=nan` said "invalid type:
+    /// string \"nan\", expected a boolean; given: freeze_deg, fold_guard".
+    #[test]
+    fn the_refused_key_is_named() {
+        let given = Params::from_iter([
+            ("freeze_deg".to_string(), Value::from(0.5)),
+            parse_assignment("fold_guard=nan").unwrap(),
+        ]);
+        let e = resolve::<crate::normalnet::NormalnetParams>("normalnet", &given)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("normalnet: bad parameter value `fold_guard` = nan: invalid type"),
+            "{e}"
+        );
+        assert!(
+            e.contains("expected a boolean") && !e.contains("freeze_deg"),
+            "{e}"
+        );
     }
 
     /// Audit: `--vertex-iterations 18446744073709551615` ran forever.
