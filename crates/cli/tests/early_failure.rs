@@ -5,27 +5,10 @@
 
 mod common;
 
-use common::{interrupt_and_wait, sphere};
+use common::{interrupt_and_wait, normalnet, s, sphere, stderr};
 use normalnet_mesh::{Mesh, write_mesh};
-use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 use std::time::Duration;
-
-fn normalnet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_normalnet"))
-        .env_remove("NORMALNET_MODEL")
-        .args(args)
-        .output()
-        .expect("normalnet runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// A closed octahedron (consistently oriented, manifold).
 fn octahedron() -> Mesh {

@@ -1,54 +1,16 @@
 //! End-to-end tests of `normalnet info`, `normalnet noise` and
 //! `normalnet metrics` on generated meshes (no shared data needed).
 
+mod common;
+
+use common::{normalnet, s};
 use normalnet_mesh::{Mesh, write_mesh};
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn normalnet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_normalnet"))
-        .args(args)
-        .output()
-        .expect("normalnet runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-/// A closed height-field box: an `n`×`n` grid top over a flat bottom would
-/// need stitching; a grid sphere is simpler: a UV sphere with poles.
-fn uv_sphere(rings: usize, segs: usize) -> Mesh {
-    let mut p = vec![[0.0, 0.0, 1.0]];
-    for i in 1..rings {
-        let th = std::f64::consts::PI * i as f64 / rings as f64;
-        for j in 0..segs {
-            let ph = 2.0 * std::f64::consts::PI * j as f64 / segs as f64;
-            p.push([th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]);
-        }
-    }
-    p.push([0.0, 0.0, -1.0]);
-    let last = (p.len() - 1) as u32;
-    let id = |i: usize, j: usize| (1 + (i - 1) * segs + j % segs) as u32;
-    let mut f = Vec::new();
-    for j in 0..segs {
-        f.push([0, id(1, j), id(1, j + 1)]);
-        f.push([last, id(rings - 1, j + 1), id(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segs {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    Mesh::new(p, f).unwrap()
-}
 
 #[test]
 fn info_noise_metrics_round_trip() {
     let dir = tempfile::tempdir().unwrap();
     let clean = dir.path().join("clean.obj");
-    write_mesh(&clean, &uv_sphere(20, 40)).unwrap();
+    write_mesh(&clean, &Mesh::uv_sphere(20, 40)).unwrap();
 
     let o = normalnet(&["info", s(&clean), "--json"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -124,8 +86,8 @@ fn errors_name_the_file_and_problem() {
 
     let big = dir.path().join("big.obj");
     let small = dir.path().join("small.obj");
-    write_mesh(&big, &uv_sphere(6, 8)).unwrap();
-    write_mesh(&small, &uv_sphere(5, 8)).unwrap();
+    write_mesh(&big, &Mesh::uv_sphere(6, 8)).unwrap();
+    write_mesh(&small, &Mesh::uv_sphere(5, 8)).unwrap();
     let o = normalnet(&["metrics", s(&big), s(&small)]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("face counts differ"));

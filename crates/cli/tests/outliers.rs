@@ -3,60 +3,22 @@
 //! classical methods and NormalNet keep it in place; `--remove-outliers`
 //! drops it and its faces; `metrics --json` reports flipped faces.
 
+mod common;
+
+use common::{bumpy_sphere, normalnet, s};
 use normalnet_mesh::{Mesh, read_mesh, write_mesh};
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn normalnet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_normalnet"))
-        .env_remove("NORMALNET_MODEL")
-        .args(args)
-        .output()
-        .expect("normalnet runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
 
-/// A bumpy UV sphere (rings × segs) with vertex `stray` moved to 1e30.
+/// A bumpy UV sphere (10 × 20) with vertex `stray` moved to 1e30.
 fn sphere_with_stray(stray: Option<usize>) -> Mesh {
-    let (rings, segs) = (10, 20);
-    let mut p = vec![[0.0, 0.0, 1.0]];
-    for i in 1..rings {
-        let th = std::f64::consts::PI * i as f64 / rings as f64;
-        for j in 0..segs {
-            let ph = 2.0 * std::f64::consts::PI * j as f64 / segs as f64;
-            let r = 1.0 + 0.03 * ((7 * i + 13 * j) % 5) as f64;
-            p.push([
-                r * th.sin() * ph.cos(),
-                r * th.sin() * ph.sin(),
-                r * th.cos(),
-            ]);
-        }
-    }
-    p.push([0.0, 0.0, -1.0]);
-    let last = (p.len() - 1) as u32;
-    let id = |i: usize, j: usize| (1 + (i - 1) * segs + j % segs) as u32;
-    let mut f = Vec::new();
-    for j in 0..segs {
-        f.push([0, id(1, j), id(1, j + 1)]);
-        f.push([last, id(rings - 1, j + 1), id(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segs {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let mut m = bumpy_sphere(10, 20, 0.03);
     if let Some(v) = stray {
-        p[v] = [1e30, 0.0, 0.0];
+        m.positions[v] = [1e30, 0.0, 0.0];
     }
-    Mesh::new(p, f).unwrap()
+    m
 }
 
 #[test]

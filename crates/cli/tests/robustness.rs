@@ -6,27 +6,11 @@
 
 mod common;
 
-use common::{interrupt_and_wait, sphere};
+use common::{interrupt_and_wait, normalnet, s, sphere, stderr};
 use normalnet_mesh::{Mesh, read_mesh, write_mesh};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
-
-fn normalnet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_normalnet"))
-        .env_remove("NORMALNET_MODEL")
-        .args(args)
-        .output()
-        .expect("normalnet runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// Fails unless `o` failed with a message containing every one of `want`.
 fn assert_refused(o: &Output, want: &[&str]) {

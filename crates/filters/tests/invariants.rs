@@ -11,33 +11,12 @@ use normalnet_mesh::{Mesh, NoProgress, Topology, vec3};
 
 /// UV sphere with a deterministic radial perturbation.
 fn noisy_sphere(rings: usize, segs: usize, noise: f64) -> Mesh {
-    let mut p = vec![[0.0, 0.0, 1.0]];
-    for i in 1..rings {
-        let th = std::f64::consts::PI * i as f64 / rings as f64;
-        for j in 0..segs {
-            let ph = 2.0 * std::f64::consts::PI * j as f64 / segs as f64;
-            p.push([th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]);
-        }
-    }
-    p.push([0.0, 0.0, -1.0]);
-    for (k, x) in p.iter_mut().enumerate() {
+    let mut m = Mesh::uv_sphere(rings, segs);
+    for (k, x) in m.positions.iter_mut().enumerate() {
         let r = 1.0 + noise * (((k * 7919) % 13) as f64 / 6.0 - 1.0);
         *x = x.map(|c| c * r);
     }
-    let last = (p.len() - 1) as u32;
-    let id = |i: usize, j: usize| (1 + (i - 1) * segs + j % segs) as u32;
-    let mut f = Vec::new();
-    for j in 0..segs {
-        f.push([0, id(1, j), id(1, j + 1)]);
-        f.push([last, id(rings - 1, j + 1), id(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segs {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    Mesh::new(p, f).unwrap()
+    m
 }
 
 /// Flat `k × k` grid in the plane z = 0 (open boundary).

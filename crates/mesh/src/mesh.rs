@@ -43,6 +43,45 @@ impl Mesh {
         Mesh::new(p, f).expect("a grid with finite heights is a valid mesh")
     }
 
+    /// A unit UV sphere: `rings` bands of latitude and `segs` of longitude,
+    /// `2·segs·(rings − 1)` triangles facing outwards. Vertex 0 is the north
+    /// pole `(0, 0, 1)`, vertex `1 + (i − 1)·segs + j` lies on ring
+    /// `i ∈ 1..rings` (polar angle `π·i/rings`) at azimuth `2π·j/segs`, and
+    /// the last vertex is the south pole. A closed, curved, genus-0 mesh
+    /// (tests and examples scale its positions for relief and noise).
+    ///
+    /// # Panics
+    /// If `rings < 2` or `segs < 3`.
+    pub fn uv_sphere(rings: usize, segs: usize) -> Mesh {
+        assert!(
+            rings >= 2 && segs >= 3,
+            "uv_sphere({rings}, {segs}): at least 2 rings and 3 segments"
+        );
+        let mut p = vec![[0.0, 0.0, 1.0]];
+        for i in 1..rings {
+            let th = std::f64::consts::PI * i as f64 / rings as f64;
+            for j in 0..segs {
+                let ph = 2.0 * std::f64::consts::PI * j as f64 / segs as f64;
+                p.push([th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]);
+            }
+        }
+        p.push([0.0, 0.0, -1.0]);
+        let last = (p.len() - 1) as u32;
+        let id = |i: usize, j: usize| (1 + (i - 1) * segs + j % segs) as u32;
+        let mut f = Vec::new();
+        for j in 0..segs {
+            f.push([0, id(1, j), id(1, j + 1)]);
+            f.push([last, id(rings - 1, j + 1), id(rings - 1, j)]);
+        }
+        for i in 1..rings - 1 {
+            for j in 0..segs {
+                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Mesh::new(p, f).expect("a UV sphere is a valid mesh")
+    }
+
     /// Builds a mesh and checks its invariants.
     ///
     /// # Errors
@@ -156,5 +195,23 @@ mod tests {
         let err = Mesh::new(q, vec![[0, 1, 2]]).unwrap_err();
         assert!(err.to_string().contains("vertex 1"), "{err}");
         assert!(Mesh::new(p, vec![[0, 1, 2]]).is_ok());
+    }
+
+    #[test]
+    fn uv_sphere_is_closed_unit_and_faces_outwards() {
+        let m = Mesh::uv_sphere(5, 8);
+        assert_eq!((m.num_vertices(), m.num_faces()), (2 + 4 * 8, 2 * 8 * 4));
+        let t = crate::Topology::new(m.num_vertices(), &m.faces);
+        assert_eq!(t.num_boundary_edges(), 0);
+        assert!(t.non_manifold_edges().is_empty());
+        for p in &m.positions {
+            assert!((crate::vec3::norm(*p) - 1.0).abs() < 1e-15);
+        }
+        for f in 0..m.num_faces() {
+            let [a, b, c] = m.corners(f);
+            let n = crate::vec3::cross(crate::vec3::sub(b, a), crate::vec3::sub(c, a));
+            let centre = crate::vec3::add(crate::vec3::add(a, b), c);
+            assert!(crate::vec3::dot(n, centre) > 0.0, "face {f} faces inwards");
+        }
     }
 }

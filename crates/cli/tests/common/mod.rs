@@ -1,40 +1,52 @@
 //! Helpers shared by the CLI's integration tests (`mod common;`).
+#![allow(dead_code)] // each test binary uses a part of them
 
 use normalnet_mesh::Mesh;
-use std::process::{Child, Command, ExitStatus};
+use std::path::Path;
+use std::process::{Child, Command, ExitStatus, Output};
 use std::time::{Duration, Instant};
 
-/// A UV sphere, `rings` × `segs`, slightly bumpy (big enough for a slow
-/// denoise at 60 × 120).
+/// `normalnet ARGS…` with the built-in model (`NORMALNET_MODEL` unset).
+pub fn normalnet(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_normalnet"))
+        .env_remove("NORMALNET_MODEL")
+        .args(args)
+        .output()
+        .expect("normalnet runs")
+}
+
+/// A path as the `&str` an argument list takes.
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// What a run printed on stderr.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A UV sphere, `rings` × `segs`, whose ring vertex `(i, j)` lies at radius
+/// `1 + bump·((7i + 13j) mod 5)` (poles at 1).
+pub fn bumpy_sphere(rings: usize, segs: usize, bump: f64) -> Mesh {
+    let mut m = Mesh::uv_sphere(rings, segs);
+    let ring_vertices = (rings - 1) * segs;
+    for (k, p) in m
+        .positions
+        .iter_mut()
+        .enumerate()
+        .skip(1)
+        .take(ring_vertices)
+    {
+        let (i, j) = (1 + (k - 1) / segs, (k - 1) % segs);
+        let r = 1.0 + bump * ((7 * i + 13 * j) % 5) as f64;
+        *p = p.map(|c| c * r);
+    }
+    m
+}
+
+/// A slightly bumpy sphere (big enough for a slow denoise at 60 × 120).
 pub fn sphere(rings: usize, segs: usize) -> Mesh {
-    let mut p = vec![[0.0, 0.0, 1.0]];
-    for i in 1..rings {
-        let th = std::f64::consts::PI * i as f64 / rings as f64;
-        for j in 0..segs {
-            let ph = 2.0 * std::f64::consts::PI * j as f64 / segs as f64;
-            let r = 1.0 + 0.02 * ((7 * i + 13 * j) % 5) as f64;
-            p.push([
-                r * th.sin() * ph.cos(),
-                r * th.sin() * ph.sin(),
-                r * th.cos(),
-            ]);
-        }
-    }
-    p.push([0.0, 0.0, -1.0]);
-    let last = (p.len() - 1) as u32;
-    let id = |i: usize, j: usize| (1 + (i - 1) * segs + j % segs) as u32;
-    let mut f = Vec::new();
-    for j in 0..segs {
-        f.push([0, id(1, j), id(1, j + 1)]);
-        f.push([last, id(rings - 1, j + 1), id(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segs {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    Mesh::new(p, f).unwrap()
+    bumpy_sphere(rings, segs, 0.02)
 }
 
 /// Sends SIGINT to `child` and waits up to 30 s for it to exit; panics
