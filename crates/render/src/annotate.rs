@@ -81,6 +81,41 @@ pub fn append_colour_bar(image: &Image, bar: &ColourBar) -> Image {
     out
 }
 
+/// A titled picture of `mesh`; with `gt` (same faces), faces coloured by
+/// their angular error against it (turbo, colour bar up to `max_error`
+/// degrees or a rounded scale of the errors), `E_a` appended to the title,
+/// and the camera framed on the ground truth so that pictures of several
+/// results line up. What `normalnet render` and the Python `render` draw.
+pub fn render_against_gt(
+    mesh: &Mesh,
+    gt: Option<&Mesh>,
+    options: &RenderOptions,
+    title: &str,
+    max_error: Option<f64>,
+) -> Result<Image, RenderError> {
+    let mut options = options.clone();
+    let mut lines = vec![title.to_string()];
+    let mut bar = None;
+    if let Some(gt) = gt {
+        let errors = normalnet_mesh::metrics::per_face_angle_errors(gt, mesh)?;
+        let e_a = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
+        let max = max_error.unwrap_or_else(|| crate::colormap::nice_error_scale(&errors));
+        if !(max > 0.0 && max.is_finite()) {
+            return Err(RenderError::InvalidOption {
+                name: "max_error",
+                message: format!("must be a positive number of degrees, got {max}"),
+            });
+        }
+        options.face_colors = Some(crate::colormap::error_colors(&errors, max));
+        options.bounds = Some(gt.bounding_box());
+        lines[0] = format!("{title}   E_a = {e_a:.2} deg")
+            .trim_start()
+            .to_string();
+        bar = Some(ColourBar::for_height(max, options.height, "error (deg)"));
+    }
+    render_annotated(mesh, &options, &lines, bar.as_ref())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -120,39 +155,4 @@ mod tests {
         assert!(out.width() > 100);
         assert_eq!(out.get(50, 50), Some([0, 0, 0]));
     }
-}
-
-/// A titled picture of `mesh`; with `gt` (same faces), faces coloured by
-/// their angular error against it (turbo, colour bar up to `max_error`
-/// degrees or a rounded scale of the errors), `E_a` appended to the title,
-/// and the camera framed on the ground truth so that pictures of several
-/// results line up. What `normalnet render` and the Python `render` draw.
-pub fn render_against_gt(
-    mesh: &Mesh,
-    gt: Option<&Mesh>,
-    options: &RenderOptions,
-    title: &str,
-    max_error: Option<f64>,
-) -> Result<Image, RenderError> {
-    let mut options = options.clone();
-    let mut lines = vec![title.to_string()];
-    let mut bar = None;
-    if let Some(gt) = gt {
-        let errors = normalnet_mesh::metrics::per_face_angle_errors(gt, mesh)?;
-        let e_a = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
-        let max = max_error.unwrap_or_else(|| crate::colormap::nice_error_scale(&errors));
-        if !(max > 0.0 && max.is_finite()) {
-            return Err(RenderError::InvalidOption {
-                name: "max_error",
-                message: format!("must be a positive number of degrees, got {max}"),
-            });
-        }
-        options.face_colors = Some(crate::colormap::error_colors(&errors, max));
-        options.bounds = Some(gt.bounding_box());
-        lines[0] = format!("{title}   E_a = {e_a:.2} deg")
-            .trim_start()
-            .to_string();
-        bar = Some(ColourBar::for_height(max, options.height, "error (deg)"));
-    }
-    render_annotated(mesh, &options, &lines, bar.as_ref())
 }
