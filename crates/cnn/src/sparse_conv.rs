@@ -240,8 +240,9 @@ mod tests {
                         let tap = (kd * k + kh) * k + kw;
                         let mut acc = [0.0f32; CO];
                         for (ci, &x) in v.iter().enumerate() {
-                            for j in 0..CO {
-                                acc[j] += x * c.w[(tap * cin + ci) * CO + j];
+                            let w = &c.w[(tap * cin + ci) * CO..][..CO];
+                            for (a, &wj) in acc.iter_mut().zip(w) {
+                                *a += x * wj;
                             }
                         }
                         let o = ((id + p - kd) * m + ih + p - kh) * m + iw + p - kw;

@@ -3,6 +3,7 @@
 //! per-mesh precomputation, and loader samples per second with 2 workers
 //! (procedural shapes with generated noise: training-like data, no test
 //! model). Run: `cargo bench -p normalnet-voxel --bench voxelize`.
+#![allow(missing_docs)] // criterion's generated functions
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use normalnet_mesh::noise::{NoiseParams, add_noise};

@@ -152,10 +152,10 @@ mod tests {
 
     fn assert_rotation(r: &Mat3) {
         let p = mat_mul(r, &transpose(r));
-        for i in 0..3 {
-            for j in 0..3 {
+        for (i, row) in p.iter().enumerate() {
+            for (j, x) in row.iter().enumerate() {
                 let e = if i == j { 1.0 } else { 0.0 };
-                assert!((p[i][j] - e).abs() < 1e-12, "{r:?}");
+                assert!((x - e).abs() < 1e-12, "{r:?}");
             }
         }
         let det = vec3::dot(r[0], vec3::cross(r[1], r[2]));

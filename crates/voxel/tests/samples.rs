@@ -17,10 +17,10 @@ fn cube_is_closed_and_outward() {
     assert!(t.non_manifold_edges().is_empty());
     let n = face_normals(&m);
     let c = 2.0;
-    for f in 0..m.num_faces() {
+    for (f, normal) in n.iter().enumerate() {
         let centre = m.corners(f).iter().fold([0.0; 3], |s, p| vec3::add(s, *p));
         let out = vec3::sub(vec3::scale(centre, 1.0 / 3.0), [c; 3]);
-        assert!(vec3::dot(out, n[f]) > 0.0);
+        assert!(vec3::dot(out, *normal) > 0.0);
     }
 }
 
@@ -31,13 +31,9 @@ fn tiny_mu_g_targets_equal_gt_normals() {
     let clean = grid_cube(6);
     let src = SampleSource::new(clean.clone(), &clean, VoxelParams::tiny(), &[1e-3; 6]).unwrap();
     let gt = face_normals(&clean);
-    for f in 0..clean.num_faces() {
+    for (f, g) in gt.iter().enumerate() {
         for t in src.world_targets(f) {
-            assert!(
-                vec3::dist2(*t, gt[f]) < 1e-20,
-                "face {f}: {t:?} vs {:?}",
-                gt[f]
-            );
+            assert!(vec3::dist2(*t, *g) < 1e-20, "face {f}: {t:?} vs {g:?}");
         }
     }
     // Larger μ_g blends across the edges: some edge face differs from GT.
