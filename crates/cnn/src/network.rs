@@ -172,6 +172,9 @@ pub struct Cnn {
     output: FoldedLinear,
     level: Level,
     largest: usize,
+    /// the largest side of the input or any layer's output (the cube masks
+    /// of the sparse pass cover at most [`CubeMask::MAX_SIDE`])
+    widest: usize,
     background: Background,
     /// the blocks run their `int8` convolutions
     int8: bool,
@@ -197,7 +200,8 @@ struct Background {
 }
 
 /// Largest per-thread buffers [`Cnn`] keeps between calls (the lite
-/// networks need 2.4 MB; the paper preset's 70 MB are allocated per call).
+/// networks need 2.4 MB; the paper preset's 70 MB are allocated per call,
+/// a few times per thread: once per piece of work rayon splits off).
 const KEPT_SCRATCH: usize = 16 << 20;
 
 /// Per-thread buffers of one forward pass.
@@ -252,6 +256,7 @@ impl Cnn {
         let stem = FoldedConv::new(&weights.stem, &weights.stem_bn);
         let stem_side = stem.output_side(weights.grid);
         let mut largest = stem_side.pow(3) * stem.cout;
+        let mut widest = weights.grid.max(stem_side);
         let (mut n, mut c) = (stem_side, stem.cout);
         let mut blocks = Vec::new();
         for (i, bw) in weights.blocks.iter().enumerate() {
@@ -297,6 +302,7 @@ impl Cnn {
                 shortcut_int8: None,
             });
             largest = largest.max(m.pow(3) * cout);
+            widest = widest.max(m);
             n = m;
             c = cout;
         }
@@ -338,6 +344,7 @@ impl Cnn {
             output,
             level: Level::detect(),
             largest,
+            widest,
             background: Background::default(),
             int8: false,
             row_stem: false,
@@ -523,23 +530,26 @@ impl Cnn {
         // Runs of a few samples, so that a thread slowed by other work (the
         // voxelizer shares the cores) does not leave the others idle at the
         // end of the batch; each run uses its thread's buffers, kept between
-        // calls (fresh ones were 2.4 MB per thread and batch to fault in and
-        // zero)
+        // calls up to KEPT_SCRATCH (fresh ones were 2.4 MB per thread and
+        // batch to fault in and zero)
         const RUN: usize = 8;
         let width = self.pooled_width();
         let mut pooled = vec![0.0f32; out.len() / no * width];
         // the convolutions sample by sample
-        pooled
-            .par_chunks_mut(RUN * width)
-            .enumerate()
-            .for_each(|(r, pooled)| {
-                self.with_thread_scratch(|s| {
-                    for (i, p) in pooled.chunks_exact_mut(width).enumerate() {
-                        self.run(sample(RUN * r + i), s, None, None, None);
-                        p.copy_from_slice(&s.v[..width]);
-                    }
-                })
-            });
+        let runs = |s: &mut Scratch, r: usize, pooled: &mut [f32]| {
+            for (i, p) in pooled.chunks_exact_mut(width).enumerate() {
+                self.run(sample(RUN * r + i), s, None, None, None);
+                p.copy_from_slice(&s.v[..width]);
+            }
+        };
+        let chunks = pooled.par_chunks_mut(RUN * width).enumerate();
+        if self.keeps_scratch() {
+            chunks.for_each(|(r, pooled)| self.with_thread_scratch(|s| runs(s, r, pooled)));
+        } else {
+            // buffers too large to keep: one set per piece of work rayon
+            // splits off (a few per thread and call), not one per run
+            chunks.for_each_init(|| self.scratch(), |s, (r, pooled)| runs(s, r, pooled));
+        }
         // the fully connected head on larger groups: each weight read once
         // per group
         const HEAD: usize = 64;
@@ -569,9 +579,8 @@ impl Cnn {
             static SCRATCH: std::cell::RefCell<Option<Scratch>> =
                 const { std::cell::RefCell::new(None) };
         }
-        let kept = 4 * self.largest * std::mem::size_of::<f32>() <= KEPT_SCRATCH;
         SCRATCH.with(|cell| match cell.try_borrow_mut() {
-            Ok(mut slot) if kept => {
+            Ok(mut slot) if self.keeps_scratch() => {
                 let s = match slot.take() {
                     Some(s) if s.x.len() >= self.largest => slot.insert(s),
                     _ => slot.insert(self.scratch()),
@@ -581,6 +590,11 @@ impl Cnn {
             // larger networks (or a nested call) take fresh buffers
             _ => f(&mut self.scratch()),
         })
+    }
+
+    /// Whether this network's per-thread buffers are kept between calls.
+    fn keeps_scratch(&self) -> bool {
+        4 * self.largest * std::mem::size_of::<f32>() <= KEPT_SCRATCH
     }
 
     fn scratch(&self) -> Scratch {
@@ -615,7 +629,7 @@ impl Cnn {
         let int8_shortcut = self.runs_int8_shortcut();
         // only the cubes near the surface (masks of grids up to 64 cubes a
         // side), unless the empty grid's activations are being recorded
-        let sparse = record.is_none() && self.grid <= CubeMask::MAX_SIDE;
+        let sparse = record.is_none() && self.widest <= CubeMask::MAX_SIDE;
         let mut clock = std::time::Instant::now();
         let mut lap = |slot: usize, profile: &mut Option<&mut LayerTimes>| {
             if let Some(p) = profile.as_deref_mut() {

@@ -35,6 +35,13 @@ fn lite_preset_matches_reference() {
     check(21, [16, 32, 64], 2, 2);
 }
 
+/// Buffers over `KEPT_SCRATCH` (35 MB per thread here, like the paper
+/// preset's) are taken per piece of rayon work instead of kept.
+#[test]
+fn a_network_too_large_to_keep_its_buffers_matches_reference() {
+    check(41, [32, 32, 32], 2, 3);
+}
+
 #[test]
 fn int8_blocks_stay_within_quantization_error_of_the_reference() {
     let (grid, batch) = (21, 6);
@@ -300,5 +307,26 @@ fn a_sample_gives_the_same_outputs_in_any_batch() {
             // == : the same values (an exact zero may differ in sign)
             assert_eq!(one, all[b * 18..(b + 1) * 18], "{precision:?} sample {b}");
         }
+    }
+}
+
+/// Review: a stem that grows the grid past the sparse pass's 64-cube masks
+/// (63 cubes, padding 3: 65 a side) panicked in the mask; such a network
+/// runs every cube, and equals the reference.
+#[test]
+fn a_stem_growing_the_grid_past_the_masks_runs_every_cube() {
+    let n = 63;
+    let mut w = common::random_net(9, n, [8, 8, 8]);
+    w.stem.padding = 3;
+    let cnn = Cnn::new(&w).unwrap();
+    let grid = common::sheet_grid(9, n);
+    let mut out = vec![0.0f32; 18];
+    cnn.forward(&grid, &mut out).unwrap();
+    let expected = common::reference_forward(&w, &grid);
+    for (k, (&got, &want)) in out.iter().zip(&expected).enumerate() {
+        assert!(
+            (got as f64 - want).abs() < 2e-4,
+            "output {k}: {got} vs {want}"
+        );
     }
 }

@@ -62,7 +62,8 @@ pub fn resolve<P: Default + Serialize + DeserializeOwned>(
             && default.is_number()
         {
             let what = match text.parse::<f64>() {
-                Ok(_) => "not a finite number",
+                Ok(x) if !x.is_finite() => "not a finite number",
+                Ok(_) => "a number given as text (give it without quotes)",
                 Err(_) => "expected a number",
             };
             return Err(bad(format!("`{key}` = {text}: {what}")));
@@ -105,7 +106,8 @@ fn blame<P: Default + Serialize + DeserializeOwned>(
 }
 
 /// `KEY=VALUE` → (key, value): the value as JSON when it parses as JSON
-/// (numbers, `true`, `null`, arrays), else as a string.
+/// (numbers, `true`, `null`, arrays), a finite number where Rust reads one
+/// that JSON does not (`.5`, `5.`, `+1`, `05`), else as a string.
 pub fn parse_assignment(text: &str) -> Result<(String, Value), String> {
     let (key, value) = text
         .split_once('=')
@@ -115,7 +117,19 @@ pub fn parse_assignment(text: &str) -> Result<(String, Value), String> {
         return Err(format!("`{text}`: empty key"));
     }
     let value = value.trim();
-    let v = serde_json::from_str(value).unwrap_or_else(|_| Value::String(value.to_string()));
+    let v = serde_json::from_str(value).unwrap_or_else(|_| {
+        match value.parse::<f64>().ok().filter(|x| x.is_finite()) {
+            Some(x) if x.fract() == 0.0 && x.abs() < 2f64.powi(53) => {
+                if x >= 0.0 {
+                    Value::from(x as u64)
+                } else {
+                    Value::from(x as i64)
+                }
+            }
+            Some(x) => Value::from(x),
+            None => Value::String(value.to_string()),
+        }
+    });
     Ok((key.to_string(), v))
 }
 
@@ -194,6 +208,18 @@ mod tests {
         );
     }
 
+    /// Review: `"0.5"` as text (Python, or quoted JSON) was called "not a
+    /// finite number".
+    #[test]
+    fn numbers_given_as_text_are_named_so() {
+        let given = Params::from_iter([("mu_g".to_string(), Value::from("0.5"))]);
+        let e = resolve::<GnfParams>("gnf", &given).unwrap_err().to_string();
+        assert!(e.contains("`mu_g` = 0.5: a number given as text"), "{e}");
+        let (key, v) = parse_assignment("mu_g=.5").unwrap();
+        let p: GnfParams = resolve("gnf", &Params::from_iter([(key, v)])).unwrap();
+        assert_eq!(p.mu_g, 0.5);
+    }
+
     /// Audit: `--vertex-iterations 18446744073709551615` ran forever.
     #[test]
     fn pass_counts_are_bounded() {
@@ -232,6 +258,17 @@ mod tests {
             parse_assignment("fold_guard=false").unwrap(),
             ("fold_guard".into(), false.into())
         );
+        // numbers JSON does not read, as Rust reads them
+        for (text, v) in [
+            ("mu_g=.5", Value::from(0.5)),
+            ("mu_g=5.", Value::from(5u64)),
+            ("n=+1", Value::from(1u64)),
+            ("n=05", Value::from(5u64)),
+            ("x=-.25", Value::from(-0.25)),
+        ] {
+            assert_eq!(parse_assignment(text).unwrap().1, v, "{text}");
+        }
+        assert_eq!(parse_assignment("mu_g=nan").unwrap().1, Value::from("nan"));
         assert!(parse_assignment("nothing").is_err());
         assert!(parse_assignment("=1").is_err());
     }

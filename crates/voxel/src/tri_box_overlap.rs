@@ -179,9 +179,16 @@ impl CubeTester {
     /// has AVX-512 (the same products and sums in the same order, so the
     /// same decisions; the hits compress-stored, no branch per cube), one
     /// by one elsewhere.
+    ///
+    /// # Panics
+    /// If `range` is not inside the grid (`a ≤ b < side` on every axis;
+    /// [`Self::cube_range`] always is): the vector path reserves room by it.
     #[inline]
     pub fn overlapped_cells(&self, range: [(usize, usize); 3], side: usize, cells: &mut Vec<u32>) {
-        debug_assert!(range.iter().all(|&(a, b)| a <= b && b < side));
+        assert!(
+            range.iter().all(|&(a, b)| a <= b && b < side),
+            "cube range {range:?} outside a grid of side {side}"
+        );
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512vl")
@@ -599,6 +606,16 @@ mod tests {
         }
         assert!(hits > 100_000, "{hits}");
         assert!(few > 400, "{few} triangles of at most 4 rows");
+    }
+
+    /// Review: a range beyond the grid made the vector path's room (the
+    /// product of the spans) wrap and write past it.
+    #[test]
+    #[should_panic(expected = "outside a grid of side 1")]
+    fn a_range_outside_the_grid_is_refused() {
+        let t = CubeTester::new([[0.0, 0.0, 0.5], [1e9, 0.0, 0.5], [0.0, 1e9, 0.5]]);
+        let huge = u32::MAX as usize;
+        t.overlapped_cells([(0, huge), (0, huge), (0, 0)], 1, &mut Vec::new());
     }
 
     #[test]
