@@ -254,22 +254,22 @@ impl Bundle {
     /// Whether every network's row stem runs in 8-bit integers with int8
     /// precision (see [`Cnn::set_int8_stem`]); returns whether it does now.
     pub fn set_int8_stem(&mut self, on: bool) -> bool {
-        let mut effective = on;
+        let mut every = on;
         for engine in &mut self.engines {
-            effective = engine.set_int8_stem(on);
+            every &= engine.set_int8_stem(on);
         }
-        effective
+        every
     }
 
     /// Whether every network's residual-block shortcuts run in 8-bit
     /// integers with int8 precision (see [`Cnn::set_int8_shortcut`]);
     /// returns whether they do now.
     pub fn set_int8_shortcut(&mut self, on: bool) -> bool {
-        let mut effective = on;
+        let mut every = on;
         for engine in &mut self.engines {
-            effective = engine.set_int8_shortcut(on);
+            every &= engine.set_int8_shortcut(on);
         }
-        effective
+        every
     }
 
     /// Loads the bundle in folder `path`.
