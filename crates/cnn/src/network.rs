@@ -572,23 +572,25 @@ impl Cnn {
         Ok(())
     }
 
-    /// Calls `f` with this thread's buffers, made for this network (kept
-    /// for the next call where they are at most [`KEPT_SCRATCH`] bytes).
+    /// Calls `f` with this thread's buffers, made for this network and kept
+    /// for the next call (networks that [`Self::keeps_scratch`]; larger ones
+    /// take theirs per rayon split in `forward_runs`).
     fn with_thread_scratch<R>(&self, f: impl FnOnce(&mut Scratch) -> R) -> R {
         thread_local! {
             static SCRATCH: std::cell::RefCell<Option<Scratch>> =
                 const { std::cell::RefCell::new(None) };
         }
+        debug_assert!(self.keeps_scratch());
         SCRATCH.with(|cell| match cell.try_borrow_mut() {
-            Ok(mut slot) if self.keeps_scratch() => {
+            Ok(mut slot) => {
                 let s = match slot.take() {
                     Some(s) if s.x.len() >= self.largest => slot.insert(s),
                     _ => slot.insert(self.scratch()),
                 };
                 f(s)
             }
-            // larger networks (or a nested call) take fresh buffers
-            _ => f(&mut self.scratch()),
+            // a nested call takes fresh buffers
+            Err(_) => f(&mut self.scratch()),
         })
     }
 
