@@ -84,7 +84,23 @@ fn main() {
         };
         std::process::exit(130);
     });
-    let result = match cli.command {
+    // a forced kernel path the CPU lacks is refused before any work
+    let result = normalnet_denoise::isa::from_env()
+        .map_err(anyhow::Error::from)
+        .and_then(|_| run(cli.command, quiet));
+    if let Err(e) = result {
+        if is_broken_pipe(&e) {
+            // the reader of stdout is gone: nothing to tell, nobody to tell
+            std::process::exit(141);
+        }
+        let _ = writeln!(std::io::stderr(), "error: {}", error_chain(&e));
+        std::process::exit(1);
+    }
+}
+
+/// Runs one subcommand.
+fn run(command: Command, quiet: bool) -> anyhow::Result<()> {
+    match command {
         // bench creates its folder before any work itself; checked here so
         // that an interruption also sweeps its temporary files
         Command::Bench(a) => {
@@ -103,14 +119,6 @@ fn main() {
         Command::Train(a) => commands::train::run(a, quiet),
         Command::Render(a) => commands::render::run(a, quiet),
         Command::Models(a) => commands::models::run(a, quiet),
-    };
-    if let Err(e) = result {
-        if is_broken_pipe(&e) {
-            // the reader of stdout is gone: nothing to tell, nobody to tell
-            std::process::exit(141);
-        }
-        let _ = writeln!(std::io::stderr(), "error: {}", error_chain(&e));
-        std::process::exit(1);
     }
 }
 

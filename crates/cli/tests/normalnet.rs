@@ -206,3 +206,63 @@ fn train_refuses_test_models() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("Block0.4"), "{}", stderr(&o));
 }
+
+/// `NORMALNET_ISA` forces the kernel path: `denoise --json` and `models`
+/// say which one ran; every path this CPU runs gives a finite mesh; a name
+/// that is no path, or one the CPU lacks, is refused before any work.
+#[test]
+fn the_kernel_path_is_forced_by_normalnet_isa_and_reported() {
+    use normalnet_denoise::isa::Isa;
+    let dir = tempfile::tempdir().unwrap();
+    let input = noisy_shape(dir.path());
+    let output = dir.path().join("out.obj");
+    for isa in Isa::all_here() {
+        let o = normalnet()
+            .env("NORMALNET_ISA", isa.name())
+            .args(["denoise", input.to_str().unwrap(), output.to_str().unwrap()])
+            .args(["--iterations", "2", "--json"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{isa}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["isa"], isa.name());
+        assert_eq!(v["parameters"]["isa"], isa.name());
+        assert_eq!(v["parameters"]["int8"], isa.has_vnni(), "int8 needs VNNI");
+        let out = read_mesh(&output).unwrap();
+        assert!(out.positions.iter().flatten().all(|c| c.is_finite()));
+        let m = normalnet()
+            .env("NORMALNET_ISA", isa.name())
+            .args(["models"])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&m.stdout);
+        assert!(
+            text.contains(&format!("kernels     {isa} (forced by NORMALNET_ISA")),
+            "{text}"
+        );
+    }
+    let o = normalnet()
+        .env("NORMALNET_ISA", "neon")
+        .args(["denoise", input.to_str().unwrap(), output.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("NORMALNET_ISA=\"neon\" is no kernel path (expected one of scalar, avx2, avx512, avx512vnni)"),
+        "{}",
+        stderr(&o)
+    );
+    if let Some(missing) = Isa::ALL.into_iter().find(|isa| !isa.runs_here()) {
+        let o = normalnet()
+            .env("NORMALNET_ISA", missing.name())
+            .args(["models"])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1));
+        assert!(
+            stderr(&o).contains("this CPU does not run it"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}

@@ -6,7 +6,8 @@
 
 use crate::weights::{BatchNormWeights, ConvWeights};
 
-/// Instruction set the kernels were compiled for, detected once.
+/// Instruction set the f32 kernels were compiled for: the process's path
+/// ([`normalnet_isa::active`], `NORMALNET_ISA` or the best the CPU runs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Level {
     Avx512,
@@ -16,20 +17,18 @@ pub(crate) enum Level {
 
 impl Level {
     pub(crate) fn detect() -> Level {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                return Level::Avx512;
-            }
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                return Level::Avx2;
-            }
+        Level::of(normalnet_isa::active())
+    }
+
+    /// The f32 kernels of a path (AVX-512 with and without VNNI share them).
+    pub(crate) fn of(isa: normalnet_isa::Isa) -> Level {
+        if isa.has_avx512() {
+            Level::Avx512
+        } else if isa.has_avx2() {
+            Level::Avx2
+        } else {
+            Level::Scalar
         }
-        Level::Scalar
     }
 }
 

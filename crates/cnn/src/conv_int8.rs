@@ -167,18 +167,9 @@ pub(crate) fn weight_scales(c: &FoldedConv) -> Vec<f32> {
         .collect()
 }
 
-/// Whether this CPU runs [`Int8Conv`].
-pub(crate) fn supported() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512bw")
-            && std::arch::is_x86_feature_detected!("avx512vnni")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+/// Whether the path `isa` runs [`Int8Conv`].
+pub(crate) fn supported(isa: normalnet_isa::Isa) -> bool {
+    cfg!(target_arch = "x86_64") && isa.has_vnni()
 }
 
 /// `x` (`[n, n, n, cin]`, all ≥ 0, as after a ReLU) as bytes in the layout
@@ -190,8 +181,9 @@ pub(crate) fn supported() -> bool {
 /// as [`Int8Conv::rows_read`] gives), only the flagged rows are written (the
 /// others keep what the buffer held); s is the whole input's either way.
 /// `max`, where the caller knows it, is max(x) (else it is computed).
-/// AVX-512 where the CPU has it (the same bytes as the scalar loop).
+/// AVX-512 where the path `isa` has it (the same bytes as the scalar loop).
 pub(crate) fn quantize<'a>(
+    isa: normalnet_isa::Isa,
     x: &[f32],
     n: usize,
     pad: usize,
@@ -206,10 +198,7 @@ pub(crate) fn quantize<'a>(
         buffer.resize(len, 0);
     }
     let out = &mut buffer[..len];
-    #[cfg(target_arch = "x86_64")]
-    let avx512 = std::arch::is_x86_feature_detected!("avx512f");
-    #[cfg(not(target_arch = "x86_64"))]
-    let avx512 = false;
+    let avx512 = cfg!(target_arch = "x86_64") && isa.has_avx512();
     let max = match (max, avx512) {
         (Some(max), _) => {
             debug_assert_eq!(max, x.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v)));
@@ -488,7 +477,7 @@ mod tests {
 
     #[test]
     fn the_integer_convolution_matches_f32_to_quantization_error() {
-        if !supported() {
+        if !supported(normalnet_isa::Isa::detected()) {
             eprintln!("no AVX-512 VNNI on this CPU: skipped");
             return;
         }
@@ -522,8 +511,15 @@ mod tests {
                 f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
                 let mut got = start.clone();
                 let mut buffer = Vec::new();
-                let (xq, sx) = quantize(&x, n, q.input_pad(), (None, None), &mut buffer);
-                // SAFETY: supported() checked the features.
+                let (xq, sx) = quantize(
+                    normalnet_isa::Isa::detected(),
+                    &x,
+                    n,
+                    q.input_pad(),
+                    (None, None),
+                    &mut buffer,
+                );
+                // SAFETY: supported(detected) checked the features.
                 unsafe { q.run(xq, sx, n, &mut got, accumulate, relu, None) };
                 let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
                 let worst = want
@@ -621,7 +617,7 @@ mod tests {
     /// rows between one zero cube each side) gives the exact integer sums.
     #[test]
     fn a_shortcut_reads_the_padded_layout_exactly() {
-        if !supported() {
+        if !supported(normalnet_isa::Isa::detected()) {
             eprintln!("no AVX-512 VNNI on this CPU: skipped");
             return;
         }
@@ -656,7 +652,7 @@ mod tests {
             let mut want = vec![0.0; m * m * m * cout];
             reference(&q, &x, 0.02, n, &mut want, false, region);
             let mut got = vec![0.0; m * m * m * cout];
-            // SAFETY: supported() checked the features.
+            // SAFETY: supported(detected) checked the features.
             unsafe { q.run(&padded, 0.02, n, &mut got, false, true, Some(region)) };
             assert!(
                 same_bits(&want, &got),
@@ -667,7 +663,7 @@ mod tests {
 
     #[test]
     fn the_tiles_give_the_exact_integer_sums() {
-        if !supported() {
+        if !supported(normalnet_isa::Isa::detected()) {
             eprintln!("no AVX-512 VNNI on this CPU: skipped");
             return;
         }
@@ -705,7 +701,7 @@ mod tests {
                 let mut want = start.clone();
                 reference(&q, &x, 0.01, n, &mut want, accumulate, region);
                 let mut got = start.clone();
-                // SAFETY: supported() checked the features.
+                // SAFETY: supported(detected) checked the features.
                 unsafe { q.run(&padded, 0.01, n, &mut got, accumulate, true, Some(region)) };
                 assert!(
                     same_bits(&want, &got),
@@ -724,7 +720,7 @@ mod tests {
                     bytes.fill(0xab);
                 }
                 let mut again = start.clone();
-                // SAFETY: supported() checked the features.
+                // SAFETY: supported(detected) checked the features.
                 unsafe {
                     q.run(
                         &garbled,
@@ -746,7 +742,14 @@ mod tests {
         // n = 1, one channel: a row of one cube between two zero cubes
         let x = [0.013];
         let mut buffer = Vec::new();
-        let (q, s) = quantize(&x, 1, 1, (None, Some(0.013)), &mut buffer);
+        let (q, s) = quantize(
+            normalnet_isa::Isa::detected(),
+            &x,
+            1,
+            1,
+            (None, Some(0.013)),
+            &mut buffer,
+        );
         assert_eq!((q, s), (&[0, 255, 0][..], 0.013 / 255.0));
         // n = 2, three channels, rows padded by one cube
         let x: Vec<f32> = [0.0, 1.0, 0.5, 2.0, 0.013, 1.999]
@@ -754,7 +757,14 @@ mod tests {
             .cycle()
             .take(24)
             .collect();
-        let (q, s) = quantize(&x, 2, 1, (None, None), &mut buffer);
+        let (q, s) = quantize(
+            normalnet_isa::Isa::detected(),
+            &x,
+            2,
+            1,
+            (None, None),
+            &mut buffer,
+        );
         assert!((s - 2.0 / 255.0).abs() < 1e-9);
         assert_eq!(q.len(), 4 * 4 * 3);
         for (row, bytes) in x.chunks_exact(6).zip(q.chunks_exact(12)) {
@@ -766,7 +776,14 @@ mod tests {
         assert_eq!((q[3], q[6]), (0, 255));
         // a smaller input reuses the buffer: only its own bytes count
         assert_eq!(
-            quantize(&[0.0; 8], 2, 0, (None, None), &mut buffer),
+            quantize(
+                normalnet_isa::Isa::detected(),
+                &[0.0; 8],
+                2,
+                0,
+                (None, None),
+                &mut buffer
+            ),
             (&[0u8; 8][..], 1.0)
         );
         // the vector path (where the CPU has it) gives the scalar loop's bytes
@@ -776,7 +793,14 @@ mod tests {
         let max = long.iter().fold(0.0f32, |m, &v| m.max(v));
         let mut scalar = vec![0; long.len()];
         bytes_scalar(&long, 1.0 / (max / 255.0), &mut scalar);
-        let (q, s) = quantize(&long, 10, 0, (None, None), &mut buffer);
+        let (q, s) = quantize(
+            normalnet_isa::Isa::detected(),
+            &long,
+            10,
+            0,
+            (None, None),
+            &mut buffer,
+        );
         assert_eq!((q, s), (&scalar[..], max / 255.0));
     }
 }

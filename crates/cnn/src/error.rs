@@ -31,6 +31,14 @@ pub enum CnnError {
         /// what is wrong
         message: String,
     },
+    /// A kernel path this CPU does not run ([`crate::Cnn::set_isa`]).
+    #[error("kernel path {asked}: this CPU does not run it (the best it runs is {detected})")]
+    Isa {
+        /// the path asked for
+        asked: &'static str,
+        /// the best path this CPU runs
+        detected: &'static str,
+    },
     /// An input or output buffer has the wrong length.
     #[error("{what} has {actual} values, expected {expected}")]
     BufferSize {

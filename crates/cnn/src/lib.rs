@@ -27,5 +27,6 @@ mod weights;
 
 pub use error::CnnError;
 pub use network::{Cnn, LayerTimes, Precision};
+pub use normalnet_isa::Isa;
 pub use train::{AdamConfig, Loss, Trainer};
 pub use weights::{BatchNormWeights, BlockWeights, ConvWeights, LinearWeights, NetWeights};

@@ -6,6 +6,7 @@ use crate::error::CnnError;
 use crate::sparse_conv::Occupied;
 use crate::stem_rows::{self, Int8Stem, Rows};
 use crate::weights::{BatchNormWeights, LinearWeights, NetWeights};
+use normalnet_isa::Isa;
 use rayon::prelude::*;
 
 /// Samples per register block of the fully connected layers.
@@ -38,10 +39,10 @@ impl FoldedLinear {
         FoldedLinear { w, b, outputs: no }
     }
 
-    fn run(&self, x: &[f32], out: &mut [f32]) {
+    fn run(&self, isa: Isa, x: &[f32], out: &mut [f32]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the feature was detected.
+        if isa.has_avx512() {
+            // SAFETY: a path runs only where the CPU has its features.
             return unsafe { self.run_avx512(x, out) };
         }
         self.run_plain(x, out);
@@ -170,6 +171,8 @@ pub struct Cnn {
     blocks: Vec<Block>,
     hidden: Vec<FoldedLinear>,
     output: FoldedLinear,
+    /// the kernel path (`level` is its f32 kernels)
+    isa: Isa,
     level: Level,
     largest: usize,
     /// the largest side of the input or any layer's output (the cube masks
@@ -342,6 +345,7 @@ impl Cnn {
             blocks,
             hidden,
             output,
+            isa: normalnet_isa::active(),
             level: Level::detect(),
             largest,
             widest,
@@ -377,13 +381,52 @@ impl Cnn {
         self.output.outputs
     }
 
-    /// Which instruction set the kernels use on this machine.
+    /// The kernel path this network runs ([`normalnet_isa::active`] unless
+    /// [`Self::set_isa`] chose another), by its `NORMALNET_ISA` name.
     pub fn instruction_set(&self) -> &'static str {
-        match self.level {
-            Level::Avx512 => "avx512",
-            Level::Avx2 => "avx2+fma",
-            Level::Scalar => "scalar",
+        self.isa.name()
+    }
+
+    /// The kernel path this network runs.
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    /// Runs this network's kernels on `isa` instead of the process's path
+    /// (tests and benchmarks compare paths in one process). The empty
+    /// grid's activations are recomputed on the new path, the stem goes
+    /// back to its default form ([`Self::set_row_stem`]`(true)`), and int8
+    /// precision, where the new path has no int8 kernels, falls back to
+    /// f32 (call [`Self::set_precision`] again after moving to a path that
+    /// has them).
+    ///
+    /// # Errors
+    /// [`CnnError::Isa`] when this CPU does not run `isa`.
+    pub fn set_isa(&mut self, isa: Isa) -> Result<(), CnnError> {
+        if !isa.runs_here() {
+            return Err(CnnError::Isa {
+                asked: isa.name(),
+                detected: Isa::detected().name(),
+            });
         }
+        self.isa = isa;
+        self.level = Level::of(isa);
+        if !conv_int8::supported(isa) {
+            self.int8 = false;
+        }
+        self.set_row_stem(true);
+        let mut s = self.scratch();
+        let mut out = vec![0.0; self.outputs()];
+        let mut background = Background::default();
+        self.run(
+            Grid::Sparse(&[], &[]),
+            &mut s,
+            Some(&mut out),
+            Some(&mut background),
+            None,
+        );
+        self.background = background;
+        Ok(())
     }
 
     /// Chooses the arithmetic of the residual blocks' 3³ convolutions and
@@ -392,7 +435,7 @@ impl Cnn {
     /// to 256); otherwise the network stays [`Precision::F32`].
     pub fn set_precision(&mut self, precision: Precision) -> Precision {
         self.int8 = false;
-        if precision == Precision::Int8 && conv_int8::supported() {
+        if precision == Precision::Int8 && conv_int8::supported(self.isa) {
             for b in &mut self.blocks {
                 if b.int8.is_none() {
                     b.int8 = Int8Conv::new(&b.a).zip(Int8Conv::new(&b.b));
@@ -662,7 +705,7 @@ impl Cnn {
                     Some(q) if int8 => {
                         let scale = s.rows.quantize(&s.occupied);
                         let (p, g) = (self.stem.pad, self.grid);
-                        // SAFETY: int8 precision means `conv_int8::supported()`
+                        // SAFETY: int8 precision means `conv_int8::supported` on this network's path
                         // (F, BW, VNNI); `set_row_stem` checked `serves`.
                         stem_max = Some(unsafe {
                             stem_rows::run_int8(q, p, &s.rows, scale, g, stem_out, true, near)
@@ -714,10 +757,16 @@ impl Cnn {
                         // the block's input is the stem's output in block 1
                         let max = stem_max.take();
                         let rows = (Some(&s.rows_read[..]), max);
-                        let (xq, sx) =
-                            conv_int8::quantize(x, n, qa.input_pad(), rows, &mut s.quantized);
+                        let (xq, sx) = conv_int8::quantize(
+                            self.isa,
+                            x,
+                            n,
+                            qa.input_pad(),
+                            rows,
+                            &mut s.quantized,
+                        );
                         // SAFETY: `set_precision` enables int8 only where
-                        // `conv_int8::supported()`.
+                        // `conv_int8::supported` on this network's path.
                         if let Some(q) = shortcut {
                             unsafe { q.run(xq, sx, n, y, false, false, only(near_y, None)) };
                         }
@@ -729,8 +778,14 @@ impl Cnn {
                         s.rows_read.resize(m * m, false);
                         qb.rows_read(near_y, m, &mut s.rows_read);
                         let rows = (Some(&s.rows_read[..]), None);
-                        let (tq, st) =
-                            conv_int8::quantize(t, m, qb.input_pad(), rows, &mut s.quantized);
+                        let (tq, st) = conv_int8::quantize(
+                            self.isa,
+                            t,
+                            m,
+                            qb.input_pad(),
+                            rows,
+                            &mut s.quantized,
+                        );
                         // SAFETY: as above.
                         unsafe { qb.run(tq, st, m, y, true, true, region_b) };
                     }
@@ -787,13 +842,13 @@ impl Cnn {
         for l in &self.hidden {
             y.clear();
             y.resize(k * l.outputs, 0.0);
-            l.run(&x, &mut y);
+            l.run(self.isa, &x, &mut y);
             for v in y.iter_mut() {
                 *v = v.max(0.0);
             }
             std::mem::swap(&mut x, &mut y);
         }
-        self.output.run(&x, out);
+        self.output.run(self.isa, &x, out);
         for v in out.iter_mut() {
             *v = v.tanh();
         }

@@ -622,7 +622,7 @@ mod tests {
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn rows_equal_the_scatter() {
-        if !std::arch::is_x86_feature_detected!("avx512f") {
+        if !normalnet_isa::Isa::detected().has_avx512() {
             eprintln!("skipped: no AVX-512F on this CPU");
             return;
         }
@@ -653,7 +653,7 @@ mod tests {
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn int8_rows_equal_the_rows_of_the_rounded_values() {
-        if !crate::conv_int8::supported() {
+        if !crate::conv_int8::supported(normalnet_isa::Isa::detected()) {
             eprintln!("skipped: no AVX-512 VNNI on this CPU");
             return;
         }

@@ -2,19 +2,29 @@
 
 mod common;
 
-use normalnet_cnn::{Cnn, CnnError, NetWeights, Precision};
+use normalnet_cnn::{Cnn, CnnError, Isa, NetWeights, Precision};
 
+/// The fast forward pass on every kernel path this CPU runs (scalar, AVX2,
+/// AVX-512) equals the f64 reference.
 fn check(grid: usize, channels: [usize; 3], batch: usize, seed: u64) {
     let w = common::random_net(seed, grid, channels);
-    let cnn = Cnn::new(&w).unwrap();
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(seed * 100 + i as u64, grid))
         .collect();
+    for isa in Isa::all_here() {
+        let mut cnn = Cnn::new(&w).unwrap();
+        cnn.set_isa(isa).unwrap();
+        assert_eq!(cnn.isa(), isa);
+        check_on(&w, &cnn, &grids, batch);
+    }
+}
+
+fn check_on(w: &NetWeights, cnn: &Cnn, grids: &[f32], batch: usize) {
     let mut out = vec![0.0f32; batch * 18];
-    cnn.forward(&grids, &mut out).unwrap();
+    cnn.forward(grids, &mut out).unwrap();
     for b in 0..batch {
         let expected =
-            common::reference_forward(&w, &grids[b * cnn.grid_len()..(b + 1) * cnn.grid_len()]);
+            common::reference_forward(w, &grids[b * cnn.grid_len()..(b + 1) * cnn.grid_len()]);
         for (k, (&got, &want)) in out[b * 18..(b + 1) * 18].iter().zip(&expected).enumerate() {
             assert!(
                 (got as f64 - want).abs() < 2e-4,
@@ -319,4 +329,29 @@ fn a_stem_growing_the_grid_past_the_masks_runs_every_cube() {
     cnn.forward(&grid, &mut out).unwrap();
     let worst = largest_difference_to_reference(&w, &cnn, &grid, &out);
     assert!(worst < 2e-4, "{worst}");
+}
+
+/// A path this CPU does not run is refused with both names; int8 falls
+/// back to f32 on a path without int8 kernels.
+#[test]
+fn set_isa_refuses_what_the_cpu_lacks_and_drops_int8_where_the_path_has_none() {
+    let w = common::random_net(9, 15, [8, 16, 32]);
+    let mut cnn = Cnn::new(&w).unwrap();
+    assert_eq!(cnn.isa(), normalnet_cnn::Isa::detected());
+    for isa in Isa::ALL {
+        match cnn.set_isa(isa) {
+            Ok(()) => assert!(isa.runs_here()),
+            Err(e) => {
+                assert!(!isa.runs_here());
+                let text = e.to_string();
+                assert!(
+                    text.contains(isa.name()) && text.contains("does not run"),
+                    "{text}"
+                );
+            }
+        }
+    }
+    cnn.set_isa(Isa::Scalar).unwrap();
+    assert_eq!(cnn.set_precision(Precision::Int8), Precision::F32);
+    assert_eq!(cnn.instruction_set(), "scalar");
 }

@@ -5,6 +5,9 @@
 /// Everything that can go wrong in choosing or running a denoiser.
 #[derive(Debug, thiserror::Error)]
 pub enum DenoiseError {
+    /// `NORMALNET_ISA` names no kernel path, or one this CPU does not run.
+    #[error("{0}")]
+    Isa(#[from] normalnet_isa::IsaError),
     /// No registered method has this name.
     #[error("unknown method {name:?} (known: {known})")]
     UnknownMethod {

@@ -31,6 +31,8 @@ pub mod registry;
 mod scale;
 
 pub use error::DenoiseError;
+/// The kernel path (`NORMALNET_ISA`), re-exported for the CLI and bindings.
+pub use normalnet_isa as isa;
 pub use params::Params;
 pub use registry::{Kind, METHODS, Method, MethodInfo, Outcome, find, names};
 
@@ -62,6 +64,7 @@ impl Denoiser {
     /// (the message names it), or a model that cannot be loaded — all before
     /// any mesh is read.
     pub fn new(name: &str, params: &Params) -> Result<Denoiser, DenoiseError> {
+        normalnet_isa::from_env()?;
         let info = find(name)?;
         let method = (info.build)(info.name, params)?;
         Ok(Denoiser { info, method })

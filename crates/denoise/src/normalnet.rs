@@ -246,6 +246,8 @@ impl Method for NormalNet {
         v["int8"] = Value::Bool(self.precision == Precision::Int8);
         v["int8_stem"] = Value::Bool(self.int8_stem);
         v["int8_shortcut"] = Value::Bool(self.int8_shortcut);
+        // and the kernel path (NORMALNET_ISA, else the best this CPU runs)
+        v["isa"] = Value::String(self.bundle.engines[0].instruction_set().into());
         v
     }
 

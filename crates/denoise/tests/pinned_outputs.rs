@@ -6,14 +6,11 @@
 //! NormalNet (f32 network; SIMD paths differ between CPUs) to 1e-9 relative
 //! in the coordinate sums (the issue asks 1e-5).
 //!
-//! Since the stem runs as row convolutions on AVX-512 (`normalnet-cnn`'s
-//! `stem_rows`, issue 12), its f32 sums are added in another order (network
-//! outputs move by ≤ 3e-7), and this small noisy input, where the vertex
-//! update's fold guard decides faces at the margin, turns that into
-//! coordinate sums 1e-3 apart after 10 iterations: both forms are pinned,
-//! the row form where the engine runs it (AVX-512), the scatter elsewhere (with
-//! the row form switched off, AVX-512 gives the old sums bit for bit).
+//! Every kernel path sums the network's f32 products in its own order, so
+//! NormalNet is pinned per path (scalar, AVX2, AVX-512), each run in a
+//! child process with `NORMALNET_ISA` forcing it.
 
+use normalnet_denoise::isa::Isa;
 use normalnet_denoise::{Denoiser, Params};
 use normalnet_mesh::{Mesh, NoProgress, NoiseParams, add_noise};
 
@@ -70,36 +67,58 @@ const EXPECTED: &[(&str, u64)] = &[
     ("oracle", 0x39b3391c1a987da3),
 ];
 
-/// Σx, Σy, Σz and Σ(x² + y² + z²) of NormalNet's output (format-1 bundle,
-/// the same weights), stem as a scatter.
-const NORMALNET_SUMS: [f64; 4] = [
-    17.093593326562253,
-    26.745764574676787,
-    5.52915794254471,
-    121.35265689272472,
+/// Σx, Σy, Σz and Σ(x² + y² + z²) of NormalNet's exact pipeline (f32
+/// network, the paper's form), per kernel path: each sums its f32 products
+/// in its own order (AVX-512 16 lanes with the stem as row convolutions,
+/// AVX2 8 lanes with the stem as a scatter, scalar one by one), and this
+/// small noisy input, where the vertex update's fold guard decides faces at
+/// the margin, turns ~1e-7 differences of the network outputs into
+/// coordinate sums up to 1e-3 apart after 10 iterations. Each path is run
+/// in a child process with `NORMALNET_ISA` set, so a machine with AVX-512
+/// checks all of them (issue 36).
+///
+/// - AVX-512 (with or without VNNI; f32 here): re-pinned when the 1³
+///   shortcuts got their own AVX-512 kernel (issue 12; before:
+///   17.116843876968343, 26.73174160856965, 5.5845997548081305,
+///   121.31605781773045); with the row stem switched off it gives the
+///   scatter sums 17.093593326562253, 26.745764574676787,
+///   5.52915794254471, 121.35265689272472 of the program before the move.
+/// - AVX2: measured with `NORMALNET_ISA=avx2` on an AVX-512 machine; sum 0
+///   is the 17.093593469863357 that an AVX2-only AMD EPYC printed when this
+///   test still expected the AVX-512 scatter sums there (issue 36).
+/// - scalar: measured with `NORMALNET_ISA=scalar`.
+const NORMALNET_SUMS: [(Isa, [f64; 4]); 4] = [
+    (
+        Isa::Scalar,
+        [
+            17.105720979574045,
+            26.67970099062153,
+            5.512388394227959,
+            121.128990158058,
+        ],
+    ),
+    (
+        Isa::Avx2,
+        [
+            17.093593469863357,
+            26.74576506057663,
+            5.52915758660775,
+            121.35265721845899,
+        ],
+    ),
+    (Isa::Avx512, AVX512_SUMS),
+    (Isa::Avx512Vnni, AVX512_SUMS),
 ];
 
-/// The same with the stem as row convolutions (AVX-512). Re-pinned when
-/// the 1³ shortcuts got their own AVX-512 kernel (issue 12, another f32
-/// summation order; before: 17.116843876968343, 26.73174160856965,
-/// 5.5845997548081305, 121.31605781773045): on the validation mesh s40 the
-/// same exact pipeline went from E_a 2.9664° to 2.9687°.
-const NORMALNET_ROW_STEM_SUMS: [f64; 4] = [
+const AVX512_SUMS: [f64; 4] = [
     17.012842916226585,
     26.729804153380005,
     5.551501217233956,
     121.18904942775728,
 ];
 
-/// Whether the shipped networks run their stem as row convolutions on this
-/// CPU (the engine's own choice, not a copy of its feature checks).
-fn row_stem() -> bool {
-    let mut bundle = normalnet_net::embedded::lite().unwrap();
-    bundle.engines[0].set_row_stem(true)
-}
-
 #[test]
-fn outputs_are_those_of_the_program_before_the_move() {
+fn classical_outputs_are_those_of_the_program_before_the_move() {
     let (clean, noisy) = meshes();
     assert_eq!(
         fnv(&noisy),
@@ -112,8 +131,16 @@ fn outputs_are_those_of_the_program_before_the_move() {
         let out = d.denoise(&noisy, Some(&clean), &NoProgress).unwrap();
         assert_eq!(fnv(&out), *expected, "{name}: {:#018x}", fnv(&out));
     }
-    // the exact pipeline of that commit: the paper's form, 10 iterations,
-    // no auto stop, every face every iteration (no freezing, no flat skip), f32
+}
+
+/// Set in the child processes of [`normalnet_exact_pipeline_on_every_path`].
+const CHILD: &str = "PINNED_OUTPUTS_CHILD";
+
+/// The exact pipeline of the program before the move: the paper's form, 10
+/// iterations, no auto stop, every face every iteration (no freezing, no
+/// flat skip), f32; its coordinate sums on the process's kernel path.
+fn exact_pipeline_sums() -> [f64; 4] {
+    let (_, noisy) = meshes();
     let mut exact = Params::new();
     exact.insert("auto_stop_deg".into(), 0.0.into());
     exact.insert("switch".into(), false.into());
@@ -121,10 +148,13 @@ fn outputs_are_those_of_the_program_before_the_move() {
     exact.insert("flat_skip_deg".into(), 0.0.into());
     exact.insert("reuse_move".into(), 0.0.into());
     exact.insert("int8".into(), false.into());
-    let out = Denoiser::new("normalnet", &exact)
-        .unwrap()
-        .denoise(&noisy, None, &NoProgress)
-        .unwrap();
+    let d = Denoiser::new("normalnet", &exact).unwrap();
+    assert_eq!(
+        d.parameters()["isa"].as_str(),
+        Some(normalnet_denoise::isa::active().name()),
+        "the network runs the process's path"
+    );
+    let out = d.denoise(&noisy, None, &NoProgress).unwrap();
     let mut sums = [0.0; 4];
     for p in &out.positions {
         for k in 0..3 {
@@ -132,19 +162,51 @@ fn outputs_are_those_of_the_program_before_the_move() {
             sums[3] += p[k] * p[k];
         }
     }
-    println!("normalnet sums {sums:?}");
-    let expected = if row_stem() {
-        NORMALNET_ROW_STEM_SUMS
-    } else {
-        NORMALNET_SUMS
-    };
-    for k in 0..4 {
-        let tol = 1e-9 * expected[k].abs().max(1.0);
-        assert!(
-            (sums[k] - expected[k]).abs() <= tol,
-            "sum {k}: {} vs {}",
-            sums[k],
-            expected[k]
-        );
+    sums
+}
+
+#[test]
+fn normalnet_exact_pipeline_on_every_path() {
+    if std::env::var_os(CHILD).is_some() {
+        let isa = normalnet_denoise::isa::active();
+        let sums = exact_pipeline_sums();
+        println!("normalnet sums on {isa}: {sums:?}");
+        let expected = NORMALNET_SUMS
+            .iter()
+            .find(|(path, _)| *path == isa)
+            .expect("every path pinned")
+            .1;
+        for k in 0..4 {
+            let tol = 1e-9 * expected[k].abs().max(1.0);
+            assert!(
+                (sums[k] - expected[k]).abs() <= tol,
+                "{isa}: sum {k}: {} vs {}",
+                sums[k],
+                expected[k]
+            );
+        }
+        return;
     }
+    let me = std::env::current_exe().unwrap();
+    let mut failed = Vec::new();
+    for isa in Isa::all_here() {
+        let out = std::process::Command::new(&me)
+            .args(["--exact", "normalnet_exact_pipeline_on_every_path"])
+            .args(["--nocapture", "--test-threads", "1"])
+            .env(normalnet_denoise::isa::ENV, isa.name())
+            .env(CHILD, "1")
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        let line = text
+            .lines()
+            .find(|l| l.contains("normalnet sums on") || l.contains("panicked"))
+            .unwrap_or("(no sums printed)");
+        eprintln!("{isa}: {line}");
+        if !out.status.success() {
+            failed.push(format!("{isa}:\n{text}"));
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
 }

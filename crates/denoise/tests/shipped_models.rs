@@ -115,12 +115,11 @@ fn int8_is_the_default_and_close_to_f32() {
     let (f32_ran, f32_e_a, f32_out) = run(Some(false));
     assert!(!f32_ran);
     let (default_ran, default_e_a, default_out) = run(None);
-    #[cfg(target_arch = "x86_64")]
-    let vnni = std::arch::is_x86_feature_detected!("avx512vnni")
-        && std::arch::is_x86_feature_detected!("avx512bw");
-    #[cfg(not(target_arch = "x86_64"))]
-    let vnni = false;
-    assert_eq!(default_ran, vnni, "int8 runs exactly where VNNI is there");
+    let vnni = normalnet_denoise::isa::active().has_vnni();
+    assert_eq!(
+        default_ran, vnni,
+        "int8 runs exactly where the path has VNNI"
+    );
     eprintln!("E_a f32 {f32_e_a:.4}°, default {default_e_a:.4}° (int8: {default_ran})");
     if default_ran {
         assert_ne!(default_out.positions, f32_out.positions);

@@ -190,11 +190,8 @@ impl CubeTester {
             "cube range {range:?} outside a grid of side {side}"
         );
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-            && side.pow(3) <= i32::MAX as usize
-        {
-            // SAFETY: the features were detected.
+        if normalnet_isa::active().has_avx512() && side.pow(3) <= i32::MAX as usize {
+            // SAFETY: the AVX-512 path runs only where the CPU has F and VL.
             return unsafe { self.overlapped_cells_avx512(range, side, cells) };
         }
         self.overlapped_cells_plain(range, side, cells);

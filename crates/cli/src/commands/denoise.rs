@@ -386,6 +386,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             "denoise_seconds": denoise_seconds,
             "total_seconds": total_seconds,
             "threads": rayon::current_num_threads(),
+            "isa": normalnet_denoise::isa::active().name(),
             "stages": stages,
             "gt": args.gt,
             "metrics": metrics,

@@ -48,11 +48,29 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     .load_bundle()?;
     let mut out = std::io::stdout().lock();
     if args.json {
-        writeln!(out, "{}", serde_json::to_string_pretty(&bundle.manifest)?)?;
+        let mut v = serde_json::to_value(&bundle.manifest)?;
+        v["isa"] = normalnet_denoise::isa::active().name().into();
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
         write!(out, "{}", describe(&bundle))?;
+        writeln!(out, "kernels     {}", kernel_paths())?;
     }
     Ok(())
+}
+
+/// The kernel path that runs and the best this CPU has, e.g. `avx2 (forced
+/// by NORMALNET_ISA; the CPU runs up to avx512vnni)`.
+fn kernel_paths() -> String {
+    use normalnet_denoise::isa::{self, Isa};
+    let (active, detected) = (isa::active(), Isa::detected());
+    if std::env::var_os(isa::ENV).is_some() {
+        format!(
+            "{active} (forced by {}; the CPU runs up to {detected})",
+            isa::ENV
+        )
+    } else {
+        format!("{active} (the best this CPU runs)")
+    }
 }
 
 /// A few lines saying what `bundle` is.
