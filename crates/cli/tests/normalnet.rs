@@ -227,7 +227,12 @@ fn the_kernel_path_is_forced_by_normalnet_isa_and_reported() {
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         assert_eq!(v["isa"], isa.name());
         assert_eq!(v["parameters"]["isa"], isa.name());
-        assert_eq!(v["parameters"]["int8"], isa.has_vnni(), "int8 needs VNNI");
+        assert_eq!(v["parameters"]["int8"], isa.has_avx2(), "int8 needs AVX2");
+        assert_eq!(
+            v["parameters"]["int8_stem"],
+            isa.has_vnni(),
+            "the int8 stem needs VNNI"
+        );
         let out = read_mesh(&output).unwrap();
         assert!(out.positions.iter().flatten().all(|c| c.is_finite()));
         let m = normalnet()

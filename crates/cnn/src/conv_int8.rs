@@ -18,6 +18,9 @@ use crate::conv::{CubeMask, FoldedConv, Region, output_side, taps};
 #[derive(Clone, Debug)]
 pub(crate) struct Int8Conv {
     w: Vec<i8>,
+    /// the same weights as i16 pairs, `[k³][cin/2][cout][2]` (two input
+    /// channels per i32 lane), for the AVX2 kernel (`vpmaddwd`)
+    w16: Vec<i16>,
     /// per output channel: f32 weight = `w · scale`
     scale: Vec<f32>,
     bias: Vec<f32>,
@@ -55,8 +58,21 @@ impl Int8Conv {
                 }
             }
         }
+        let w16 = (0..k3 * cin * cout)
+            .map(|i| {
+                let (tap, pair, co, r) = (
+                    i / (cin * cout),
+                    i / (2 * cout) % (cin / 2),
+                    i / 2 % cout,
+                    i % 2,
+                );
+                let ci = 2 * pair + r;
+                i16::from(w[((tap * groups + ci / 4) * cout + co) * 4 + ci % 4])
+            })
+            .collect();
         Some(Int8Conv {
             w,
+            w16,
             scale,
             bias: c.b.clone(),
             cin,
@@ -78,14 +94,19 @@ impl Int8Conv {
     }
 
     /// As [`FoldedConv::run`] on an input quantized by [`quantize`] with
-    /// [`Self::input_pad`] (`input` bytes, f32 value = byte · `input_scale`).
+    /// [`Self::input_pad`] (`input` bytes, f32 value = byte · `input_scale`),
+    /// with the kernels of `isa`: AVX-512 VNNI (`vpdpbusd`), or AVX2
+    /// (`vpmaddwd` on bytes widened to i16). Both sum the same products
+    /// exactly in i32 and finish them with the same f32 steps: the same
+    /// bits.
     ///
     /// # Safety
-    /// The CPU must have AVX-512 F, BW and VNNI.
+    /// [`supported`]`(isa)`, and the CPU runs `isa`.
     #[cfg(target_arch = "x86_64")]
     #[allow(clippy::too_many_arguments)]
     pub(crate) unsafe fn run(
         &self,
+        isa: normalnet_isa::Isa,
         input: &[u8],
         input_scale: f32,
         n: usize,
@@ -95,6 +116,14 @@ impl Int8Conv {
         region: Option<Region>,
     ) {
         assert_eq!(input.len(), n * n * (n + 2 * self.layout_pad) * self.cin);
+        if !isa.has_vnni() {
+            debug_assert!(isa.has_avx2());
+            let flags = [accumulate, relu];
+            // SAFETY: the caller checked the features.
+            return unsafe {
+                crate::conv_int8_avx2::run(self, input, input_scale, n, out, flags, region)
+            };
+        }
         // V vectors of 16 output channels; tiles of 1 ..= 16 / V cubes
         // (at most 12): as many i32 chains in flight, within the 32 registers
         macro_rules! go {
@@ -167,9 +196,36 @@ pub(crate) fn weight_scales(c: &FoldedConv) -> Vec<f32> {
         .collect()
 }
 
-/// Whether the path `isa` runs [`Int8Conv`].
+/// Whether the path `isa` runs [`Int8Conv`] (AVX-512 VNNI or AVX2).
 pub(crate) fn supported(isa: normalnet_isa::Isa) -> bool {
-    cfg!(target_arch = "x86_64") && isa.has_vnni()
+    cfg!(target_arch = "x86_64") && isa.has_avx2()
+}
+
+impl Int8Conv {
+    /// Kernel size, stride, padding, input and output channels, the zero
+    /// cubes of the input layout: what the AVX2 kernel reads.
+    pub(crate) fn shape(&self) -> [usize; 6] {
+        [
+            self.k,
+            self.stride,
+            self.pad,
+            self.cin,
+            self.cout,
+            self.layout_pad,
+        ]
+    }
+
+    /// The i16 pair weights of tap `tap`, `[cin/2][cout][2]`.
+    pub(crate) fn tap_weights16(&self, taps: std::ops::Range<usize>) -> &[i16] {
+        let per_tap = self.cin * self.cout;
+        &self.w16[taps.start * per_tap..taps.end * per_tap]
+    }
+
+    /// Per output channel: `input_scale ·` weight scale, and the bias.
+    pub(crate) fn finish_factors(&self, input_scale: f32) -> (Vec<f32>, &[f32]) {
+        let f = self.scale.iter().map(|&s| input_scale * s).collect();
+        (f, &self.bias)
+    }
 }
 
 /// `x` (`[n, n, n, cin]`, all ≥ 0, as after a ReLU) as bytes in the layout
@@ -198,7 +254,8 @@ pub(crate) fn quantize<'a>(
         buffer.resize(len, 0);
     }
     let out = &mut buffer[..len];
-    let avx512 = cfg!(target_arch = "x86_64") && isa.has_avx512();
+    let x86 = cfg!(target_arch = "x86_64");
+    let (avx512, avx2) = (x86 && isa.has_avx512(), x86 && isa.has_avx2());
     let max = match (max, avx512) {
         (Some(max), _) => {
             debug_assert_eq!(max, x.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v)));
@@ -207,6 +264,9 @@ pub(crate) fn quantize<'a>(
         // SAFETY: the feature was detected.
         #[cfg(target_arch = "x86_64")]
         (None, true) => unsafe { max_avx512(x) },
+        // SAFETY: as above.
+        #[cfg(target_arch = "x86_64")]
+        (None, false) if avx2 => unsafe { max_avx2(x) },
         _ => x.iter().fold(0.0f32, |m, &v| m.max(v)),
     };
     let scale = if max > 0.0 { max / 255.0 } else { 1.0 };
@@ -222,10 +282,13 @@ pub(crate) fn quantize<'a>(
         let (middle, right) = rest.split_at_mut(row);
         left.fill(0);
         right.fill(0);
-        match avx512 {
+        match (avx512, avx2) {
             // SAFETY: the feature was detected.
             #[cfg(target_arch = "x86_64")]
-            true => unsafe { bytes_avx512(x, inv, middle) },
+            (true, _) => unsafe { bytes_avx512(x, inv, middle) },
+            // SAFETY: as above.
+            #[cfg(target_arch = "x86_64")]
+            (_, true) => unsafe { bytes_avx2(x, inv, middle) },
             _ => bytes_scalar(x, inv, middle),
         }
     }
@@ -252,6 +315,67 @@ fn max_avx512(x: &[f32]) -> f32 {
     tail.iter().fold(_mm512_reduce_max_ps(m), |m, &v| m.max(v))
 }
 
+/// As [`max_avx512`], 8 at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn max_avx2(x: &[f32]) -> f32 {
+    use std::arch::x86_64::*;
+    let chunks = x.chunks_exact(8);
+    let tail = chunks.remainder();
+    let mut m = _mm256_setzero_ps();
+    for c in chunks {
+        // SAFETY: 8 readable f32.
+        m = _mm256_max_ps(m, unsafe { _mm256_loadu_ps(c.as_ptr()) });
+    }
+    let mut lanes = [0.0f32; 8];
+    // SAFETY: 8 writable f32.
+    unsafe { _mm256_storeu_ps(lanes.as_mut_ptr(), m) };
+    lanes
+        .into_iter()
+        .chain(tail.iter().copied())
+        .fold(0.0f32, f32::max)
+}
+
+/// As [`bytes_scalar`] (the same bytes: the same multiply, add and
+/// truncation, saturated to 0 ..= 255 by the packs), 32 at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn bytes_avx2(x: &[f32], inv: f32, out: &mut [u8]) {
+    use std::arch::x86_64::*;
+    let chunks = x.chunks_exact(32);
+    let tail = chunks.remainder();
+    let (iv, half, top) = (
+        _mm256_set1_ps(inv),
+        _mm256_set1_ps(0.5),
+        _mm256_set1_ps(255.0),
+    );
+    // the packs interleave 128-bit lanes: dword order back to the input's
+    let order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+    let mut outs = out.chunks_exact_mut(32);
+    for (c, o) in chunks.zip(&mut outs) {
+        // SAFETY: 32 readable f32, 32 writable bytes.
+        unsafe {
+            let q: [__m256i; 4] = std::array::from_fn(|i| {
+                let v = _mm256_loadu_ps(c.as_ptr().add(8 * i));
+                _mm256_cvttps_epi32(_mm256_min_ps(
+                    _mm256_add_ps(_mm256_mul_ps(v, iv), half),
+                    top,
+                ))
+            });
+            let words = (
+                _mm256_packus_epi32(q[0], q[1]),
+                _mm256_packus_epi32(q[2], q[3]),
+            );
+            let bytes = _mm256_packus_epi16(words.0, words.1);
+            _mm256_storeu_si256(
+                o.as_mut_ptr().cast(),
+                _mm256_permutevar8x32_epi32(bytes, order),
+            );
+        }
+    }
+    bytes_scalar(tail, inv, outs.into_remainder());
+}
+
 /// As [`bytes_scalar`] (the same bytes), 16 at a time.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
@@ -268,9 +392,14 @@ fn bytes_avx512(x: &[f32], inv: f32, out: &mut [u8]) {
     for (c, o) in chunks.zip(&mut outs) {
         // SAFETY: 16 readable f32, 16 writable bytes.
         unsafe {
-            let v = _mm512_min_ps(
-                _mm512_add_ps(_mm512_mul_ps(_mm512_loadu_ps(c.as_ptr()), iv), half),
-                top,
+            // (max with 0: a negative input saturates to 0 like the
+            // scalar cast, not to 255 through the unsigned conversion)
+            let v = _mm512_max_ps(
+                _mm512_min_ps(
+                    _mm512_add_ps(_mm512_mul_ps(_mm512_loadu_ps(c.as_ptr()), iv), half),
+                    top,
+                ),
+                _mm512_setzero_ps(),
             );
             _mm_storeu_si128(
                 o.as_mut_ptr().cast(),
@@ -337,25 +466,45 @@ fn dense_vnni<const V: usize>(
             unsafe { _mm512_storeu_ps(d.as_mut_ptr(), y) };
         }
     };
-    let computed = |o: usize| region.is_none_or(|r| r.mask.contains(o));
-    // cubes outside the region take the background's value, if any (runs
-    // of cubes in one copy: a library call per 64-byte cube cost more
-    // than the copy)
+    let mut sums = [[_mm512_setzero_si512(); V]; 12];
+    assert!((1..=sums.len()).contains(&tiles.len()));
+    for_each_tile(m, co, region, tiles.len(), out, |[od, oh, ow], t, out| {
+        // SAFETY: the caller checked the features; `tile_sums` checks its
+        // slices.
+        unsafe { tiles[t - 1](c, input, n, [od, oh, ow], &mut sums) };
+        let first = (od * m + oh) * m + ow;
+        for (i, sum) in sums[..t].iter().enumerate() {
+            let o = first + i;
+            finish(sum, &mut out[o * co..o * co + co]);
+        }
+    });
+}
+
+/// Walks the output cubes of an `m³ × co` convolution output `out` as the
+/// int8 kernels compute them: per W row, the cubes from the first to the
+/// last one `region` asks for in tiles of at most `max_tile` neighbouring
+/// cubes (`tile([od, oh, ow], t, out)` writes cubes `ow .. ow + t` of row
+/// (`od`, `oh`)); every cube outside the region, in a tile or not, then
+/// takes the background's value, if any (runs of cubes in one copy: a
+/// library call per 64-byte cube cost more than the copy).
+#[inline(always)]
+pub(crate) fn for_each_tile(
+    m: usize,
+    co: usize,
+    region: Option<Region>,
+    max_tile: usize,
+    out: &mut [f32],
+    mut tile: impl FnMut([usize; 3], usize, &mut [f32]),
+) {
     let background_run = |cubes: std::ops::Range<usize>, out: &mut [f32]| {
         if let Some(bg) = region.and_then(|r| r.background) {
             let at = cubes.start * co..cubes.end * co;
             out[at.clone()].copy_from_slice(&bg[at]);
         }
     };
-    let background = |o: usize, out: &mut [f32]| background_run(o..o + 1, out);
-    let mut sums = [[_mm512_setzero_si512(); V]; 12];
-    assert!((1..=sums.len()).contains(&tiles.len()));
     for od in 0..m {
         for oh in 0..m {
             let first = (od * m + oh) * m;
-            // the row's computed cubes lie in lo..hi: those in tiles (a
-            // cube between them not in the region is computed, then
-            // replaced by the background), the rest background
             // the first and last cube to compute
             let (lo, hi) = match region.map(|r| r.mask.row(od * m + oh)) {
                 None => (0, m),
@@ -372,16 +521,13 @@ fn dense_vnni<const V: usize>(
             background_run(first + hi..first + m, out);
             let mut ow = lo;
             while ow < hi {
-                let t = tile_len(hi - ow, tiles.len());
-                // SAFETY: the caller checked the features; `tile_sums`
-                // checks its slices.
-                unsafe { tiles[t - 1](c, input, n, [od, oh, ow], &mut sums) };
-                for (i, sum) in sums[..t].iter().enumerate() {
-                    let o = first + ow + i;
-                    if computed(o) {
-                        finish(sum, &mut out[o * co..o * co + co]);
-                    } else {
-                        background(o, out);
+                let t = tile_len(hi - ow, max_tile);
+                tile([od, oh, ow], t, out);
+                if let Some(r) = region {
+                    for o in first + ow..first + ow + t {
+                        if !r.mask.contains(o) {
+                            background_run(o..o + 1, out);
+                        }
                     }
                 }
                 ow += t;
@@ -478,7 +624,7 @@ mod tests {
     #[test]
     fn the_integer_convolution_matches_f32_to_quantization_error() {
         if !supported(normalnet_isa::Isa::detected()) {
-            eprintln!("no AVX-512 VNNI on this CPU: skipped");
+            eprintln!("no AVX2 on this CPU: skipped");
             return;
         }
         for (cin, cout, stride, n) in [
@@ -509,7 +655,6 @@ mod tests {
                     .collect();
                 let mut want = start.clone();
                 f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
-                let mut got = start.clone();
                 let mut buffer = Vec::new();
                 let (xq, sx) = quantize(
                     normalnet_isa::Isa::detected(),
@@ -519,8 +664,7 @@ mod tests {
                     (None, None),
                     &mut buffer,
                 );
-                // SAFETY: supported(detected) checked the features.
-                unsafe { q.run(xq, sx, n, &mut got, accumulate, relu, None) };
+                let got = on_every_path(&q, xq, sx, n, &start, [accumulate, relu], None);
                 let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
                 let worst = want
                     .iter()
@@ -581,6 +725,33 @@ mod tests {
         }
     }
 
+    /// `q` run on `input` over a copy of `start` on every int8 path this
+    /// CPU runs (AVX2, AVX-512 VNNI), which must agree bit for bit; their
+    /// output.
+    fn on_every_path(
+        q: &Int8Conv,
+        input: &[u8],
+        scale: f32,
+        n: usize,
+        start: &[f32],
+        [accumulate, relu]: [bool; 2],
+        region: Option<Region>,
+    ) -> Vec<f32> {
+        let mut outputs = normalnet_isa::Isa::all_here()
+            .filter(|&isa| supported(isa))
+            .map(|isa| {
+                let mut out = start.to_vec();
+                // SAFETY: the CPU runs the path, and it has int8 kernels.
+                unsafe { q.run(isa, input, scale, n, &mut out, accumulate, relu, region) };
+                (isa, out)
+            });
+        let (first, want) = outputs.next().expect("an int8 path");
+        for (isa, got) in outputs {
+            assert!(same_bits(&want, &got), "{isa} differs from {first}");
+        }
+        want
+    }
+
     /// A deterministic stream of 24-bit numbers.
     fn numbers(seed: u32) -> impl FnMut() -> u32 {
         let mut state = seed;
@@ -618,7 +789,7 @@ mod tests {
     #[test]
     fn a_shortcut_reads_the_padded_layout_exactly() {
         if !supported(normalnet_isa::Isa::detected()) {
-            eprintln!("no AVX-512 VNNI on this CPU: skipped");
+            eprintln!("no AVX2 on this CPU: skipped");
             return;
         }
         let mut next = numbers(9);
@@ -651,9 +822,8 @@ mod tests {
             };
             let mut want = vec![0.0; m * m * m * cout];
             reference(&q, &x, 0.02, n, &mut want, false, region);
-            let mut got = vec![0.0; m * m * m * cout];
-            // SAFETY: supported(detected) checked the features.
-            unsafe { q.run(&padded, 0.02, n, &mut got, false, true, Some(region)) };
+            let zeros = vec![0.0; m * m * m * cout];
+            let got = on_every_path(&q, &padded, 0.02, n, &zeros, [false, true], Some(region));
             assert!(
                 same_bits(&want, &got),
                 "cin {cin} cout {cout} stride {stride}"
@@ -664,7 +834,7 @@ mod tests {
     #[test]
     fn the_tiles_give_the_exact_integer_sums() {
         if !supported(normalnet_isa::Isa::detected()) {
-            eprintln!("no AVX-512 VNNI on this CPU: skipped");
+            eprintln!("no AVX2 on this CPU: skipped");
             return;
         }
         let mut next = numbers(3);
@@ -700,9 +870,8 @@ mod tests {
             for accumulate in [false, true] {
                 let mut want = start.clone();
                 reference(&q, &x, 0.01, n, &mut want, accumulate, region);
-                let mut got = start.clone();
-                // SAFETY: supported(detected) checked the features.
-                unsafe { q.run(&padded, 0.01, n, &mut got, accumulate, true, Some(region)) };
+                let flags = [accumulate, true];
+                let got = on_every_path(&q, &padded, 0.01, n, &start, flags, Some(region));
                 assert!(
                     same_bits(&want, &got),
                     "cin {cin} cout {cout} stride {stride} n {n}"
@@ -719,19 +888,7 @@ mod tests {
                 {
                     bytes.fill(0xab);
                 }
-                let mut again = start.clone();
-                // SAFETY: supported(detected) checked the features.
-                unsafe {
-                    q.run(
-                        &garbled,
-                        0.01,
-                        n,
-                        &mut again,
-                        accumulate,
-                        true,
-                        Some(region),
-                    )
-                };
+                let again = on_every_path(&q, &garbled, 0.01, n, &start, flags, Some(region));
                 assert!(same_bits(&got, &again));
             }
         }
@@ -793,14 +950,35 @@ mod tests {
         let max = long.iter().fold(0.0f32, |m, &v| m.max(v));
         let mut scalar = vec![0; long.len()];
         bytes_scalar(&long, 1.0 / (max / 255.0), &mut scalar);
-        let (q, s) = quantize(
-            normalnet_isa::Isa::detected(),
-            &long,
-            10,
-            0,
-            (None, None),
-            &mut buffer,
-        );
-        assert_eq!((q, s), (&scalar[..], max / 255.0));
+        // (every path: 1,000 values are 31 runs of 32 and a tail)
+        for isa in normalnet_isa::Isa::all_here() {
+            let (q, s) = quantize(isa, &long, 10, 0, (None, None), &mut buffer);
+            assert_eq!((q, s), (&scalar[..], max / 255.0), "{isa}");
+        }
+        // negative and not-a-number inputs saturate to 0 as the scalar cast does
+        let odd: Vec<f32> = (0..64)
+            .map(|i| {
+                if i % 3 == 0 {
+                    -1.0
+                } else if i % 7 == 0 {
+                    f32::NAN
+                } else {
+                    i as f32
+                }
+            })
+            .collect();
+        let mut scalar = vec![0; odd.len()];
+        bytes_scalar(&odd, 2.0, &mut scalar);
+        for isa in normalnet_isa::Isa::all_here() {
+            let mut got = vec![0; odd.len()];
+            match isa {
+                #[cfg(target_arch = "x86_64")]
+                normalnet_isa::Isa::Avx2 => unsafe { bytes_avx2(&odd, 2.0, &mut got) },
+                #[cfg(target_arch = "x86_64")]
+                normalnet_isa::Isa::Avx512 => unsafe { bytes_avx512(&odd, 2.0, &mut got) },
+                _ => bytes_scalar(&odd, 2.0, &mut got),
+            }
+            assert_eq!(got, scalar, "{isa}");
+        }
     }
 }

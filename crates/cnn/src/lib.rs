@@ -18,6 +18,8 @@
 
 mod conv;
 mod conv_int8;
+#[cfg(target_arch = "x86_64")]
+mod conv_int8_avx2;
 mod error;
 mod network;
 mod sparse_conv;

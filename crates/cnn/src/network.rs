@@ -464,7 +464,12 @@ impl Cnn {
     }
 
     fn runs_int8_stem(&self) -> bool {
-        self.int8_stem && self.int8 && self.row_stem && self.stem_int8.is_some()
+        // the int8 row stem is VNNI code (the blocks also run on AVX2)
+        self.int8_stem
+            && self.int8
+            && self.row_stem
+            && self.isa.has_vnni()
+            && self.stem_int8.is_some()
     }
 
     /// With [`Precision::Int8`], whether the residual blocks' 1³ shortcuts
@@ -768,11 +773,13 @@ impl Cnn {
                         // SAFETY: `set_precision` enables int8 only where
                         // `conv_int8::supported` on this network's path.
                         if let Some(q) = shortcut {
-                            unsafe { q.run(xq, sx, n, y, false, false, only(near_y, None)) };
+                            unsafe {
+                                q.run(self.isa, xq, sx, n, y, false, false, only(near_y, None))
+                            };
                         }
                         lap(2 + 3 * bi, &mut profile);
                         // SAFETY: as above.
-                        unsafe { qa.run(xq, sx, n, t, false, true, region_a) };
+                        unsafe { qa.run(self.isa, xq, sx, n, t, false, true, region_a) };
                         lap(3 + 3 * bi, &mut profile);
                         s.rows_read.clear();
                         s.rows_read.resize(m * m, false);
@@ -787,7 +794,7 @@ impl Cnn {
                             &mut s.quantized,
                         );
                         // SAFETY: as above.
-                        unsafe { qb.run(tq, st, m, y, true, true, region_b) };
+                        unsafe { qb.run(self.isa, tq, st, m, y, true, true, region_b) };
                     }
                     _ => {
                         b.shortcut

@@ -653,7 +653,7 @@ mod tests {
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn int8_rows_equal_the_rows_of_the_rounded_values() {
-        if !crate::conv_int8::supported(normalnet_isa::Isa::detected()) {
+        if !normalnet_isa::Isa::detected().has_vnni() {
             eprintln!("skipped: no AVX-512 VNNI on this CPU");
             return;
         }

@@ -101,7 +101,7 @@ pub struct NormalnetParams {
     /// `normalnet_net::switch`)
     pub switch: bool,
     /// the residual blocks' 3³ convolutions in 8-bit integers where the CPU
-    /// has AVX-512 VNNI (`normalnet_cnn::Precision::Int8`); false, or a CPU
+    /// has AVX2 or AVX-512 VNNI (`normalnet_cnn::Precision::Int8`); false, or a CPU
     /// without it: f32
     pub int8: bool,
     /// with `int8`, the first 5³ convolution (the row stem) in 8-bit
@@ -242,7 +242,7 @@ impl Method for NormalNet {
         let mut v = serde_json::to_value(&self.params).unwrap_or(Value::Null);
         // say which bundle ran, the built-in one included
         v["model"] = Value::String(self.bundle.path.display().to_string());
-        // and the arithmetic that ran (int8 falls back to f32 without VNNI)
+        // and the arithmetic that ran (int8 falls back to f32 without AVX2)
         v["int8"] = Value::Bool(self.precision == Precision::Int8);
         v["int8_stem"] = Value::Bool(self.int8_stem);
         v["int8_shortcut"] = Value::Bool(self.int8_shortcut);

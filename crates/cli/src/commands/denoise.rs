@@ -185,7 +185,7 @@ pub struct MethodArgs {
     #[arg(long)]
     pub no_switch: bool,
     /// NormalNet: f32 arithmetic throughout (default: the residual blocks'
-    /// 3³ convolutions in 8-bit integers where the CPU has AVX-512 VNNI).
+    /// 3³ convolutions in 8-bit integers where the CPU has AVX2 or AVX-512 VNNI).
     #[arg(long = "f32")]
     pub f32: bool,
 }

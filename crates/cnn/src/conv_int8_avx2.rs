@@ -1,0 +1,183 @@
+//! The int8 convolutions of [`Int8Conv`] on AVX2 (no AVX-512): the input
+//! bytes widened to i16, the signed-byte weights held as i16 pairs, and
+//! `vpmaddwd` summing two products per i32 lane. Every product of a byte
+//! (0 ..= 255) and a weight (−127 ..= 127) and every pair sum (≤ 64,770 in
+//! magnitude) is exact in i32, as are the sums over taps, so the sums equal
+//! VNNI's `vpdpbusd` sums bit for bit, and the f32 steps after them (one
+//! fused multiply-add by input scale × weight scale plus bias, the residual
+//! sum, the ReLU) are the same operations in the same order: the outputs
+//! are those of the AVX-512 VNNI kernel.
+//!
+//! The narrower scheme `vpmaddubsw` (u8 × s8 pairs summed in i16) would
+//! double the products per instruction but saturates: 255·127 + 255·127 =
+//! 64,770 > 32,767, so its sums are not exact for these bytes.
+//!
+//! 16 output channels (two vectors of 8) at a time, tiles of up to six
+//! neighbouring output cubes of a W row: 12 i32 chains, two weight vectors
+//! and one input broadcast in the 16 registers.
+
+use crate::conv::{Region, output_side, taps};
+use crate::conv_int8::{Int8Conv, for_each_tile};
+use std::arch::x86_64::*;
+use std::cell::RefCell;
+
+/// Output channels per block (two vectors of 8).
+const BLOCK: usize = 16;
+/// Vectors per block.
+const V: usize = BLOCK / 8;
+/// Most output cubes per tile.
+const MAX_TILE: usize = 6;
+
+thread_local! {
+    /// The widened input of the current call (grows, never shrinks).
+    static WIDE: RefCell<Vec<i16>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The i32 sums of `T` output cubes, one channel block.
+type TileFn = unsafe fn(&Int8Conv, &[i16], usize, [usize; 4], &mut [[__m256i; V]; MAX_TILE]);
+
+/// [`Int8Conv::run`] on AVX2.
+///
+/// # Safety
+/// The CPU has AVX2 and FMA.
+#[target_feature(enable = "avx2,fma")]
+pub(crate) unsafe fn run(
+    c: &Int8Conv,
+    input: &[u8],
+    input_scale: f32,
+    n: usize,
+    out: &mut [f32],
+    [accumulate, relu]: [bool; 2],
+    region: Option<Region>,
+) {
+    let [k, s, p, _, co, _] = c.shape();
+    assert!(co.is_multiple_of(BLOCK), "{co} output channels");
+    let m = output_side(n, k, s, p);
+    assert_eq!(out.len(), m * m * m * co);
+    let (factor, bias) = c.finish_factors(input_scale);
+    let tiles: [TileFn; MAX_TILE] = [
+        tile_sums::<1>,
+        tile_sums::<2>,
+        tile_sums::<3>,
+        tile_sums::<4>,
+        tile_sums::<5>,
+        tile_sums::<6>,
+    ];
+    // i32 sums of one output cube's block → f32 scale, bias, [residual], [ReLU]
+    let finish = |sums: &[__m256i; V], cb: usize, dst: &mut [f32]| {
+        for (v, &sum) in sums.iter().enumerate() {
+            let at = cb + 8 * v..cb + 8 * v + 8;
+            let (f, b): (&[f32; 8], &[f32; 8]) = (
+                factor[at.clone()].try_into().expect("factors"),
+                bias[at.clone()].try_into().expect("bias"),
+            );
+            // SAFETY: 8 readable f32 each; unaligned loads.
+            let (fv, bv) = unsafe { (_mm256_loadu_ps(f.as_ptr()), _mm256_loadu_ps(b.as_ptr())) };
+            let mut y = _mm256_fmadd_ps(_mm256_cvtepi32_ps(sum), fv, bv);
+            let d: &mut [f32; 8] = (&mut dst[at]).try_into().expect("out row");
+            if accumulate {
+                // SAFETY: 8 readable f32.
+                y = _mm256_add_ps(y, unsafe { _mm256_loadu_ps(d.as_ptr()) });
+            }
+            if relu {
+                y = _mm256_max_ps(y, _mm256_setzero_ps());
+            }
+            // SAFETY: 8 writable f32.
+            unsafe { _mm256_storeu_ps(d.as_mut_ptr(), y) };
+        }
+    };
+    WIDE.with_borrow_mut(|wide| {
+        widen(input, wide);
+        let wide = &wide[..input.len()];
+        let mut sums = [[_mm256_setzero_si256(); V]; MAX_TILE];
+        for_each_tile(m, co, region, MAX_TILE, out, |[od, oh, ow], t, out| {
+            let first = (od * m + oh) * m + ow;
+            for cb in (0..co).step_by(BLOCK) {
+                // SAFETY: the caller checked the features; `tile_sums`
+                // checks its slices.
+                unsafe { tiles[t - 1](c, wide, n, [od, oh, ow, cb], &mut sums) };
+                for (i, sum) in sums[..t].iter().enumerate() {
+                    let o = first + i;
+                    finish(sum, cb, &mut out[o * co..o * co + co]);
+                }
+            }
+        });
+    });
+}
+
+/// `bytes` as i16 into the front of `wide` (grown as needed).
+#[target_feature(enable = "avx2")]
+fn widen(bytes: &[u8], wide: &mut Vec<i16>) {
+    if wide.len() < bytes.len() {
+        wide.resize(bytes.len(), 0);
+    }
+    let chunks = bytes.chunks_exact(16);
+    let tail = chunks.remainder();
+    let mut outs = wide[..bytes.len()].chunks_exact_mut(16);
+    for (b, w) in chunks.zip(&mut outs) {
+        // SAFETY: 16 readable bytes, 16 writable i16.
+        unsafe {
+            let v = _mm256_cvtepu8_epi16(_mm_loadu_si128(b.as_ptr().cast()));
+            _mm256_storeu_si256(w.as_mut_ptr().cast(), v);
+        }
+    }
+    for (w, &b) in outs.into_remainder().iter_mut().zip(tail) {
+        *w = i16::from(b);
+    }
+}
+
+/// The i32 sums of the `T` output cubes `ow .. ow + T` of output row (`od`,
+/// `oh`), output channels `cb .. cb + 16`, into `sums[..T]`: for every tap
+/// and input channel pair, two weight loads feed `2·T` `vpmaddwd` (one
+/// input pair broadcast per cube). The input's W rows are padded, so every
+/// W tap is in range; D and H taps out of range are skipped.
+///
+/// # Safety
+/// The CPU has AVX2.
+#[target_feature(enable = "avx2")]
+unsafe fn tile_sums<const T: usize>(
+    c: &Int8Conv,
+    wide: &[i16],
+    n: usize,
+    [od, oh, ow, cb]: [usize; 4],
+    sums: &mut [[__m256i; V]; MAX_TILE],
+) {
+    let [k, s, p, cin, co, layout_pad] = c.shape();
+    let pairs = cin / 2;
+    let padded = (n + 2 * layout_pad) * cin;
+    assert!(cb + BLOCK <= co);
+    let mut acc = [[_mm256_setzero_si256(); V]; T];
+    for kd in taps(od, s, p, k, n) {
+        let id = od * s + kd - p;
+        for kh in taps(oh, s, p, k, n) {
+            let ih = oh * s + kh - p;
+            // position in the padded W row of output cube ow's tap kw
+            let start = (id * n + ih) * padded + (ow * s + layout_pad - p) * cin;
+            let x = &wide[start..start + ((T - 1) * s + k) * cin];
+            let first = (kd * k + kh) * k;
+            let wt = c.tap_weights16(first..first + k);
+            // SAFETY (all reads): kw < k, g < pairs, t < T, v < V: input
+            // values (t·s + kw)·cin + 2g + 2 ≤ ((T − 1)·s + k)·cin, weight
+            // values ((kw·pairs + g)·co + cb + 8v)·2 + 16 ≤ k·cin·co.
+            unsafe {
+                for kw in 0..k {
+                    for g in 0..pairs {
+                        let wg = wt.as_ptr().add(((kw * pairs + g) * co + cb) * 2);
+                        let wv: [__m256i; V] =
+                            std::array::from_fn(|v| _mm256_loadu_si256(wg.add(16 * v).cast()));
+                        let xg = x.as_ptr().add(kw * cin + 2 * g);
+                        for (t, a) in acc.iter_mut().enumerate() {
+                            let xv = _mm256_set1_epi32(
+                                xg.add(t * s * cin).cast::<i32>().read_unaligned(),
+                            );
+                            for (a, &w) in a.iter_mut().zip(&wv) {
+                                *a = _mm256_add_epi32(*a, _mm256_madd_epi16(xv, w));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    sums[..T].copy_from_slice(&acc);
+}
