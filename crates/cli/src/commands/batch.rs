@@ -258,7 +258,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 row.status = "failed";
                 row.error = Some(format!("{e:#}"));
                 if !quiet {
-                    eprintln!("{}: failed: {e:#}", input.display());
+                    stderr_line!("{}: failed: {e:#}", input.display());
                 }
             }
         }
