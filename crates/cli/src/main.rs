@@ -93,9 +93,17 @@ fn main() {
             output::check_dir(&a.out).and_then(|()| commands::bench::run(a, quiet))
         }
         Command::Denoise(a) => commands::denoise::run(*a, quiet),
-        Command::Batch(a) => {
-            output::check_dir(&a.out).and_then(|()| commands::batch::run(*a, quiet))
-        }
+        Command::Batch(a) => output::check_dir(&a.out).and_then(|()| {
+            // a rerun after a SIGKILL: the killed run's temporary file goes
+            let removed = output::remove_stale_temp_files(&a.out);
+            if removed > 0 {
+                stderr_line!(
+                    "{}: removed {removed} temporary file(s) of an interrupted run",
+                    a.out.display()
+                );
+            }
+            commands::batch::run(*a, quiet)
+        }),
         Command::Noise(a) => commands::noise::run(a, quiet),
         Command::Metrics(a) => commands::metrics::run(a, quiet),
         Command::Info(a) => commands::info::run(a, quiet),
