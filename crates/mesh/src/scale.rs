@@ -226,7 +226,7 @@ mod tests {
         assert_eq!(mul_pow2(1.5, 1024), f64::INFINITY);
     }
 
-    /// A cube's corners (radius 1 about their median) times `s`, plus
+    /// A cube's corners times `2·s` (robust radius `2·s`), 200 vertices, plus
     /// `strays` vertices at `[far, 0, 0]`.
     fn body_with_strays(s: f64, far: f64, strays: usize) -> Mesh {
         let mut positions: Vec<Vec3> = (0..200)
