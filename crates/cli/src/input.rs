@@ -39,6 +39,6 @@ pub fn outlier_warning(path: &Path, mesh: &Mesh) -> Option<String> {
 /// about the data, not progress).
 pub fn warn_outliers(path: &Path, mesh: &Mesh) {
     if let Some(line) = outlier_warning(path, mesh) {
-        eprintln!("{line}");
+        stderr_line!("{line}");
     }
 }

@@ -3,15 +3,18 @@
 //! to stdout through a handle (`writeln!`, not `println!`), so that a closed
 //! stdout (`normalnet info x.obj | head -1`) is an error the command returns
 //! and [`main`] ends quietly with 141 (128 + SIGPIPE, what a shell reports
-//! for a program the pipe killed), instead of a panic.
+//! for a program the pipe killed), instead of a panic. Lines on stderr go
+//! through `stderr_line!` (`stderr.rs`), which cannot panic either.
+#![deny(clippy::print_stderr)]
 
+#[macro_use]
+mod stderr;
 mod commands;
 mod input;
 mod output;
 mod progress;
 
 use clap::{Parser, Subcommand};
-use std::io::Write;
 
 /// Mesh denoising: NormalNet (learned normal filtering) and classical filters.
 #[derive(Parser)]
@@ -73,15 +76,14 @@ fn main() {
     // as a shell expects (128 + SIGINT). Best effort: without a handler the
     // signal kills the process as before.
     // The message is best effort too: a closed stderr must not stop the
-    // exit (eprintln! would panic in the handler's thread).
+    // exit.
     let _ = ctrlc::set_handler(|| {
         let removed = output::remove_temp_files();
-        let mut err = std::io::stderr();
-        let _ = if removed > 0 {
-            writeln!(err, "interrupted: removed {removed} temporary file(s)")
+        if removed > 0 {
+            stderr_line!("interrupted: removed {removed} temporary file(s)");
         } else {
-            writeln!(err, "interrupted")
-        };
+            stderr_line!("interrupted");
+        }
         std::process::exit(130);
     });
     // a forced kernel path the CPU lacks is refused before any work
@@ -93,7 +95,7 @@ fn main() {
             // the reader of stdout is gone: nothing to tell, nobody to tell
             std::process::exit(141);
         }
-        let _ = writeln!(std::io::stderr(), "error: {}", error_chain(&e));
+        stderr_line!("error: {}", error_chain(&e));
         std::process::exit(1);
     }
 }
@@ -107,9 +109,17 @@ fn run(command: Command, quiet: bool) -> anyhow::Result<()> {
             output::check_dir(&a.out).and_then(|()| commands::bench::run(a, quiet))
         }
         Command::Denoise(a) => commands::denoise::run(*a, quiet),
-        Command::Batch(a) => {
-            output::check_dir(&a.out).and_then(|()| commands::batch::run(*a, quiet))
-        }
+        Command::Batch(a) => output::check_dir(&a.out).and_then(|()| {
+            // a rerun after a SIGKILL: the killed run's temporary file goes
+            let removed = output::remove_stale_temp_files(&a.out);
+            if removed > 0 {
+                stderr_line!(
+                    "{}: removed {removed} temporary file(s) of an interrupted run",
+                    a.out.display()
+                );
+            }
+            commands::batch::run(*a, quiet)
+        }),
         Command::Noise(a) => commands::noise::run(a, quiet),
         Command::Metrics(a) => commands::metrics::run(a, quiet),
         Command::Info(a) => commands::info::run(a, quiet),

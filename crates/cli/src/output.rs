@@ -162,6 +162,41 @@ pub fn remove_temp_files() -> usize {
     removed
 }
 
+/// Removes from `dir` the temporary files of processes that no longer run
+/// (`.normalnet-<pid>-*.tmp` whose process id is not a live process: a
+/// SIGKILL, an out-of-memory kill or a power cut runs no handler and leaves
+/// the file being written), so that a rerun into the folder leaves no
+/// leftovers; returns how many were removed. This process's own files and
+/// those of live processes are left alone. Linux only (liveness read from
+/// `/proc`); elsewhere nothing is removed. A folder written by several
+/// machines at once is not supported: another machine's process ids are
+/// not visible here.
+pub fn remove_stale_temp_files(dir: &Path) -> usize {
+    if !Path::new("/proc/self").exists() {
+        return 0;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let own = std::process::id();
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        let pid = name
+            .strip_prefix(".normalnet-")
+            .filter(|_| name.ends_with(".tmp"))
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|pid| pid.parse::<u32>().ok());
+        let Some(pid) = pid else { continue };
+        let alive = pid == own || Path::new("/proc").join(pid.to_string()).exists();
+        if !alive && std::fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -240,5 +275,30 @@ mod tests {
         assert_eq!(remove_temp_files(), 2);
         assert!(ours.iter().all(|p| !p.exists()));
         assert!(theirs.exists(), "another process's file is left alone");
+    }
+
+    /// Issue 39: a batch killed with SIGKILL (no handler runs) left its
+    /// temporary file in the output folder for good.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn issue_39_temp_files_of_dead_processes_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // a process that has exited: its id is free (and not reused this soon)
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let stale = d.join(format!(".normalnet-{dead}-x1.tmp"));
+        let own = d.join(format!("{}y2.tmp", normalnet_mesh::io::temp_prefix()));
+        // pid 1 runs as long as the system does
+        let live = d.join(".normalnet-1-z3.tmp");
+        let others = [d.join("out.obj"), d.join(".normalnet-abc-q.tmp")];
+        for p in [&stale, &own, &live].into_iter().chain(&others) {
+            std::fs::write(p, b"half a mesh").unwrap();
+        }
+        assert_eq!(remove_stale_temp_files(d), 1);
+        assert!(!stale.exists());
+        assert!(own.exists() && live.exists() && others.iter().all(|p| p.exists()));
+        assert_eq!(remove_stale_temp_files(&d.join("missing")), 0);
     }
 }

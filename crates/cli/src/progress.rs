@@ -3,7 +3,10 @@
 //! a pipe) plain lines with position, ETA and the last message every
 //! [`LINE_SECONDS`] (`NORMALNET_PROGRESS_SECONDS` overrides it), the first
 //! one only once a task has run that long, so quick commands stay silent;
-//! nothing with `--quiet`.
+//! nothing with `--quiet`. Neither can panic on a closed stderr (issue
+//! 39): plain lines go through `stderr_line!`, and indicatif drops its
+//! draw errors in every call made here (not in `set_tab_width`, which
+//! unwraps them: not to be used).
 
 use indicatif::{ProgressBar, ProgressStyle};
 use normalnet_mesh::Progress;
@@ -89,9 +92,10 @@ impl Bar {
             format!("{}", task.pos)
         };
         let sep = if task.message.is_empty() { "" } else { " · " };
-        eprintln!(
+        stderr_line!(
             "[{now:>6.0} s] {}: {state}{sep}{}",
-            task.label, task.message
+            task.label,
+            task.message
         );
     }
 

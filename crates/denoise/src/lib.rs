@@ -97,13 +97,14 @@ impl Denoiser {
     /// # Extreme scales
     /// Every method measures normals and areas through products of lengths
     /// (~L⁴), which underflow or overflow for a mesh at ~1e-80 or ~1e80.
-    /// A mesh whose bounding-box diagonal lies outside
+    /// A mesh whose robust radius (ignoring 1 % of the vertices, so that a
+    /// stray vertex does not set the unit, issue 39) lies outside
     /// [`normalnet_mesh::scale::SAFE_DIAGONAL_MIN`] ..=
     /// [`normalnet_mesh::scale::SAFE_DIAGONAL_MAX`] (`2^-40 ≈ 9.1e-13` to
-    /// `2^40 ≈ 1.1e12`) is therefore denoised in another unit: its positions
-    /// (and `gt`'s) times an exact power of two `2^k` chosen so that the
-    /// mesh's robust radius (ignoring 1 % of the vertices, so that a stray
-    /// vertex does not set the unit) is ~1, the result times `2^-k`. Multiplying by a power of two is exact (barring
+    /// `2^40 ≈ 1.1e12`) is therefore denoised in another unit, whatever its
+    /// bounding box: its positions (and `gt`'s, which must stay in the
+    /// mesh's frame for the oracle) times an exact power of two `2^k` chosen
+    /// so that the robust radius is ~1, the result times `2^-k`. Multiplying by a power of two is exact (barring
     /// subnormal results), and every method parameter is relative (to `d_s`,
     /// `l_e`, `l_e²`, or an angle), so the result is the one the method gives
     /// the mesh in that unit, scaled back. A mesh inside the range is

@@ -157,3 +157,38 @@ fn an_extent_beyond_f64_is_refused_with_a_clear_error() {
         "{text}"
     );
 }
+
+/// Issue 39: a body of extent ~1e-80 with one stray vertex near 1 kept the
+/// bounding box in range, so it was denoised as it was and every face of
+/// the body read as degenerate. Its robust radius (the stray vertex left
+/// out) now sets the unit: the result is, bit for bit, the one of the same
+/// mesh at unit size (scaled by 2^266, its stray vertex at 2^266) scaled
+/// back. A body of extent 1e-6 with a stray vertex near 1 is in the safe
+/// range and is denoised as it is.
+#[test]
+fn issue_39_a_tiny_body_with_a_stray_vertex_near_1_is_rescaled() {
+    let (_, mut noisy) = meshes();
+    noisy.positions[7] = [mul_pow2(1.0, 266), 0.0, 0.0];
+    let base = run("gnf", &noisy, None);
+    // the body (diagonal ~1) was denoised: the test would pass on the identity
+    let moved = base
+        .positions
+        .iter()
+        .zip(&noisy.positions)
+        .map(|(a, b)| (0..3).fold(0.0f64, |m, k| m.max((a[k] - b[k]).abs())))
+        .fold(0.0f64, f64::max);
+    assert!(moved > 1e-4 && moved < 1.0, "{moved}");
+    let tiny = scaled_pow2(&noisy, -266);
+    assert_eq!(tiny.positions[7], [1.0, 0.0, 0.0]);
+    let out = run("gnf", &tiny, None);
+    assert_eq!(out.positions, scaled_pow2(&base, -266).positions);
+
+    let mut micro = scaled(&noisy, 1e-6);
+    micro.positions[7] = [1.0, 0.0, 0.0];
+    assert_eq!(
+        run("gnf", &micro, None).positions,
+        normalnet_filters::denoise(&GnfParams::default(), &micro, &NoProgress)
+            .unwrap()
+            .positions
+    );
+}

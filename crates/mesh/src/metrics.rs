@@ -26,7 +26,7 @@ use crate::error::MeshError;
 use crate::geometry::{face_areas, face_normals};
 use crate::mesh::Mesh;
 use crate::progress::{NoProgress, Progress};
-use crate::scale::{bounding_box_diagonal, mul_pow2, normalising_exponent, pow2_scaled};
+use crate::scale::{cap_exponent, largest_coordinate, mul_pow2, pow2_scaled, working_exponent};
 use crate::vec3::{self, Vec3};
 use rayon::prelude::*;
 
@@ -81,19 +81,60 @@ pub struct Metrics {
 }
 
 /// The angle in degrees between the normals of each face of `result` and
-/// the same face of `gt` (90° where either is degenerate).
+/// the same face of `gt` (90° where either is degenerate), measured in the
+/// same frame as [`compare`] (a pair at an extreme scale scaled by a power
+/// of two: angles do not change with the unit).
 ///
 /// # Errors
 /// [`MeshError::Mismatch`] when the face counts differ.
 pub fn per_face_angle_errors(gt: &Mesh, result: &Mesh) -> Result<Vec<f64>, MeshError> {
     check_counts(gt, result)?;
-    let ng = face_normals(gt);
-    let nr = face_normals(result);
+    // angles do not change with the unit: measured where the normals are safe
+    let (gt, result) = measuring_frame(gt, result);
+    let ng = face_normals(&gt);
+    let nr = face_normals(&result);
     Ok(ng
         .par_iter()
         .zip(nr.par_iter())
         .map(|(&a, &b)| face_angle(a, b).to_degrees())
         .collect())
+}
+
+/// The largest coordinate exponent the metrics scale a pair to (`2^240`):
+/// `L⁴` of every face (the squared norm of an edge cross product) stays
+/// finite, also for a stray vertex far from the body.
+const MEASURING_MAX_EXPONENT: i32 = 240;
+
+/// The `k` that `gt` and `result` are measured at (both times `2^k`, so
+/// that distances between them scale with it), `None` to measure them as
+/// they are: the ground truth's [`working_exponent`] (its robust radius
+/// sets the unit: the relative metrics are in its units, and a result
+/// that exploded must not push the ground truth out of range), capped so
+/// that no coordinate of either mesh exceeds `2^240`.
+fn measuring_exponent(gt: &Mesh, result: &Mesh) -> Option<i32> {
+    let k = working_exponent(gt, MEASURING_MAX_EXPONENT)?;
+    let k = cap_exponent(
+        k,
+        largest_coordinate(&result.positions),
+        MEASURING_MAX_EXPONENT,
+    );
+    (k != 0).then_some(k)
+}
+
+/// `gt` and `result` scaled by [`measuring_exponent`] (borrowed as they are
+/// when there is none).
+fn measuring_frame<'a>(
+    gt: &'a Mesh,
+    result: &'a Mesh,
+) -> (std::borrow::Cow<'a, Mesh>, std::borrow::Cow<'a, Mesh>) {
+    use std::borrow::Cow;
+    match measuring_exponent(gt, result) {
+        Some(k) => {
+            let scaled = |m: &Mesh| Cow::Owned(m.with_positions(pow2_scaled(&m.positions, k)));
+            (scaled(gt), scaled(result))
+        }
+        None => (Cow::Borrowed(gt), Cow::Borrowed(result)),
+    }
 }
 
 /// Angle in radians between two unit (or zero) normals; π/2 when either is zero.
@@ -122,11 +163,13 @@ fn check_counts(gt: &Mesh, result: &Mesh) -> Result<(), MeshError> {
 /// A result of zero total area (every face degenerate) has no area weights:
 /// `E_v` and the mean distance then weight its used vertices equally.
 ///
-/// When the ground truth's bounding-box diagonal lies outside
+/// When the ground truth's robust radius (`crate::scale::robust_radius`:
+/// a stray vertex does not set the unit, issue 39) lies outside
 /// [`crate::scale::SAFE_DIAGONAL_MIN`] ..= [`crate::scale::SAFE_DIAGONAL_MAX`],
-/// both meshes are measured scaled by the same exact power of two (the
-/// diagonal ~1) and the distances and lengths are scaled back: a pair at
-/// 1e-80 gets its true `E_a`, not 90° for every face.
+/// both meshes are measured scaled by the same exact power of two (that
+/// radius ~1, no coordinate beyond `2^240`) and the distances and lengths
+/// are scaled back: a pair at 1e-80 gets its true `E_a`, not 90° for every
+/// face, also with a stray vertex near 1.
 ///
 /// # Errors
 /// [`MeshError::Mismatch`] when the face counts differ;
@@ -146,9 +189,9 @@ pub fn compare_with_progress(
     progress: &dyn Progress,
 ) -> Result<Metrics, MeshError> {
     check_counts(gt, result)?;
-    if let Some(k) = normalising_exponent(bounding_box_diagonal(gt)) {
+    if let Some(k) = measuring_exponent(gt, result) {
         let scaled = |m: &Mesh| m.with_positions(pow2_scaled(&m.positions, k));
-        let m = compare_with_progress(&scaled(gt), &scaled(result), progress)?;
+        let m = compare_in_frame(&scaled(gt), &scaled(result), progress)?;
         let back = |x: f64| mul_pow2(x, -k);
         return Ok(Metrics {
             e_v: back(m.e_v),
@@ -161,6 +204,15 @@ pub fn compare_with_progress(
             ..m
         });
     }
+    compare_in_frame(gt, result, progress)
+}
+
+/// [`compare_with_progress`] in the frame the meshes are given in.
+fn compare_in_frame(
+    gt: &Mesh,
+    result: &Mesh,
+    progress: &dyn Progress,
+) -> Result<Metrics, MeshError> {
     let nf = gt.num_faces();
     progress.start("metrics", 4);
     let (theta, flipped_faces) = {
@@ -451,6 +503,49 @@ mod tests {
             }
             assert!(close(q.e_v_over_le, r.e_v_over_le));
         }
+    }
+
+    /// Issue 39: a ground truth of extent 1e-80 with one stray vertex near
+    /// 1 kept its bounding box in range and was measured as it was: every
+    /// face of the body read as degenerate (90°), in `compare` and in the
+    /// per-face errors that `render --gt` colours. Now the pair is measured
+    /// scaled by 2^240 (the body's unit, capped so that the stray vertex
+    /// stays at most 2^240): exactly the metrics of the pair given at that
+    /// scale, its distances scaled back.
+    #[test]
+    fn issue_39_a_tiny_ground_truth_with_a_stray_vertex_is_rescaled() {
+        let body = Mesh::uv_sphere(8, 12);
+        let tiny = |m: &Mesh| {
+            let mut p = pow2_scaled(&m.positions, -266);
+            p[5] = [1.0, 0.0, 0.0];
+            m.with_positions(p)
+        };
+        let moved = body.with_positions(
+            body.positions
+                .iter()
+                .enumerate()
+                .map(|(i, p)| [p[0] + 0.01 * (i % 3) as f64, p[1], p[2]])
+                .collect(),
+        );
+        let (gt, result) = (tiny(&body), tiny(&moved));
+        let up = |m: &Mesh| m.with_positions(pow2_scaled(&m.positions, 240));
+        let (gt_up, result_up) = (up(&gt), up(&result));
+        let q = compare(&gt, &result).unwrap();
+        let r = compare(&gt_up, &result_up).unwrap();
+        assert_eq!(q.e_a_deg, r.e_a_deg);
+        assert!(q.e_a_deg < 10.0, "{}", q.e_a_deg);
+        assert_eq!(q.degenerate_faces_result, 0);
+        assert_eq!(q.e_v, mul_pow2(r.e_v, -240));
+        assert_eq!(q.hausdorff, mul_pow2(r.hausdorff, -240));
+        assert_eq!(q.e_v_over_le, r.e_v_over_le);
+        let errors = per_face_angle_errors(&gt, &result).unwrap();
+        assert_eq!(errors, per_face_angle_errors(&gt_up, &result_up).unwrap());
+        let body_faces: Vec<f64> = (errors.iter().zip(&gt.faces))
+            .filter(|(_, f)| !f.contains(&5))
+            .map(|(e, _)| *e)
+            .collect();
+        assert!(body_faces.len() > 150);
+        assert!(body_faces.iter().all(|e| *e < 45.0), "{errors:?}");
     }
 
     #[test]

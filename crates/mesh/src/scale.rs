@@ -17,6 +17,14 @@
 //! (`2^-736 .. 2^320`; f64 spans `2^-1022 .. 2^1024`), while every mesh in
 //! physical units from micrometres to millions of kilometres is inside and
 //! is never rescaled (its results keep their bits).
+//!
+//! Whether a mesh is rescaled is decided by its *robust radius*
+//! ([`robust_radius`]: 99 % of the vertices lie within it of the
+//! per-coordinate median), not by its bounding box (issue 39): one stray
+//! vertex near 1 beside a body of extent 1e-80 keeps the box in range while
+//! every face of the body underflows, and one stray vertex at 1e300 beside
+//! a unit-sized body pushes the box out of range although the body needs no
+//! change ([`working_exponent`]).
 
 use crate::mesh::Mesh;
 use crate::vec3::{self, Vec3};
@@ -89,6 +97,85 @@ pub fn bounding_box_diagonal(mesh: &Mesh) -> f64 {
     diagonal_length(lo, hi)
 }
 
+/// The share of vertices whose extent sets the unit ([`robust_radius`]):
+/// the same 99th percentile as [`crate::outliers`] (up to 1 % of the
+/// vertices may be anywhere; at least one vertex of any mesh of two or more).
+pub const ROBUST_QUANTILE: f64 = 0.99;
+
+/// The [`ROBUST_QUANTILE`] over the vertices of `max_k |x_k − m_k|`, `m` the
+/// per-coordinate median (nearest rank): the radius that all but 1 % of the
+/// vertices lie within. No squares, so it neither underflows nor overflows;
+/// 0 for no vertex, or when 99 % of them coincide.
+pub fn robust_radius(positions: &[Vec3]) -> f64 {
+    let n = positions.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let rank = |q: f64| ((q * (n - 1) as f64).floor() as usize).min(n - 1);
+    let mut values: Vec<f64> = Vec::with_capacity(n);
+    let mut centre = [0.0; 3];
+    for (k, c) in centre.iter_mut().enumerate() {
+        values.clear();
+        values.extend(positions.iter().map(|p| p[k]));
+        *c = *values.select_nth_unstable_by(rank(0.5), f64::total_cmp).1;
+    }
+    values.clear();
+    values.extend(
+        positions
+            .iter()
+            .map(|p| (0..3).fold(0.0f64, |m, k| m.max((p[k] - centre[k]).abs()))),
+    );
+    *values
+        .select_nth_unstable_by(rank(ROBUST_QUANTILE), f64::total_cmp)
+        .1
+}
+
+/// The largest absolute coordinate of `positions` (0 for none).
+pub fn largest_coordinate(positions: &[Vec3]) -> f64 {
+    positions
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, c| m.max(c.abs()))
+}
+
+/// The `k` that a computation on `mesh` runs at (its positions times
+/// `2^k`), `None` to run it on `mesh` as it is.
+///
+/// - The [`robust_radius`] `r` decides: `None` when it lies in the safe
+///   range, else the `k` with `r · 2^k` in `[1, 2)`, whatever the bounding
+///   box says (a stray vertex neither keeps a tiny body at its scale nor
+///   pushes a unit-sized one away from it).
+/// - Where `r` is 0 (99 % of the vertices at one point) the bounding-box
+///   diagonal decides, as [`normalising_exponent`].
+/// - `k` is capped so that no coordinate exceeds `2^max_exponent` (room for
+///   the caller's products: the metrics need `L⁴` of every face, a
+///   denoising pass only sums).
+///
+/// A mesh whose robust radius lies in the safe range always gets `None`:
+/// every mesh in physical units keeps its bits.
+pub fn working_exponent(mesh: &Mesh, max_exponent: i32) -> Option<i32> {
+    let radius = robust_radius(&mesh.positions);
+    let k = if radius > 0.0 && radius.is_finite() {
+        if (SAFE_DIAGONAL_MIN..=SAFE_DIAGONAL_MAX).contains(&radius) {
+            return None;
+        }
+        -exponent(radius)
+    } else {
+        normalising_exponent(bounding_box_diagonal(mesh))?
+    };
+    let k = cap_exponent(k, largest_coordinate(&mesh.positions), max_exponent);
+    (k != 0).then_some(k)
+}
+
+/// `k` lowered, where it scales up, so that `largest · 2^k` stays below
+/// `2^(max_exponent + 1)`, but never below 0: a cap never scales down.
+pub fn cap_exponent(k: i32, largest: f64, max_exponent: i32) -> i32 {
+    if k <= 0 || !(largest > 0.0 && largest.is_finite()) {
+        return k;
+    }
+    k.min((max_exponent - exponent(largest)).max(0))
+}
+
 /// The `k` with `diagonal · 2^k` in `[1, 2)` when `diagonal` lies outside
 /// the safe range; `None` inside it, for 0 (a single point: nothing to
 /// scale) and for a non-finite diagonal (no power of two helps).
@@ -137,6 +224,52 @@ mod tests {
         assert_eq!(mul_pow2(1.0, -1074), 5e-324);
         assert_eq!(mul_pow2(5e-324, 2097), 2f64.powi(1023));
         assert_eq!(mul_pow2(1.5, 1024), f64::INFINITY);
+    }
+
+    /// A cube's corners times `2·s` (robust radius `2·s`), 200 vertices, plus
+    /// `strays` vertices at `[far, 0, 0]`.
+    fn body_with_strays(s: f64, far: f64, strays: usize) -> Mesh {
+        let mut positions: Vec<Vec3> = (0..200)
+            .map(|i| [(i % 2) as f64, (i / 2 % 2) as f64, (i / 4 % 2) as f64].map(|c| c * 2.0 * s))
+            .collect();
+        positions.extend(std::iter::repeat_n([far, 0.0, 0.0], strays));
+        Mesh::new(positions, vec![[0, 1, 2]]).unwrap()
+    }
+
+    /// Issue 39: one stray vertex near 1 kept the box of a body at 1e-80 in
+    /// range, and the body was not rescaled.
+    #[test]
+    fn issue_39_the_robust_radius_sets_the_unit_not_the_box() {
+        for (s, far) in [(1e-80, 1.0), (1e-80, 1e-80), (1e80, 1.0), (1e-300, 1e-10)] {
+            let mesh = body_with_strays(s, far, 1);
+            let k = working_exponent(&mesh, 1000).unwrap();
+            let r = mul_pow2(robust_radius(&mesh.positions), k);
+            assert!((1.0..2.0).contains(&r), "{s:e}, {far:e}: {r}");
+        }
+        // a unit-sized body keeps its unit, a stray vertex at 1e300 or not
+        for far in [1.0, 1e300, -1e-300] {
+            assert_eq!(working_exponent(&body_with_strays(1.0, far, 1), 1000), None);
+        }
+        // more than 1 % of the vertices far out: they are part of the body
+        let spread = body_with_strays(1e-80, 1.0, 10);
+        assert_eq!(working_exponent(&spread, 1000), None);
+        // the cap: no coordinate beyond 2^max_exponent
+        let capped = body_with_strays(1e-80, 1.0, 1);
+        let k = working_exponent(&capped, 240).unwrap();
+        assert_eq!(k, 240);
+        // ... which never scales a tiny body further down
+        assert_eq!(
+            working_exponent(&body_with_strays(1e-80, 1e300, 1), 240),
+            None
+        );
+        assert_eq!(cap_exponent(-50, 1e300, 240), -50);
+        // all vertices at one point: the box decides (a point: nothing)
+        assert_eq!(working_exponent(&body_with_strays(0.0, 0.0, 1), 1000), None);
+        let mut two = body_with_strays(0.0, 0.0, 0);
+        two.positions[0] = [1e-200, 0.0, 0.0];
+        let k = working_exponent(&two, 1000).unwrap();
+        assert_eq!(mul_pow2(1e-200, k).floor(), 1.0);
+        assert_eq!(robust_radius(&[]), 0.0);
     }
 
     #[test]

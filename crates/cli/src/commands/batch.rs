@@ -8,7 +8,9 @@
 //! on; the command then ends with an error (exit status 1) naming how many
 //! failed. Progress over files with ETA on stderr; `DIR/batch_summary.csv`
 //! and `.json` list every input (faces, seconds, status done / skipped /
-//! failed, error), rewritten after each file. The output folder may not be
+//! failed, error), rewritten after each failure, at least every second and
+//! at the end (a killed run's summary is up to a second behind; the
+//! outputs, not the summary, decide what a rerun skips). The output folder may not be
 //! the folder of an input (outputs would replace or join the inputs).
 
 use std::io::Write;
@@ -23,6 +25,10 @@ use serde::Serialize;
 use super::denoise::{MethodArgs, given_params};
 use crate::output;
 use crate::progress::Bar;
+
+/// The summary is rewritten at most this often (seconds), besides after
+/// each failure and at the end.
+const SUMMARY_SECONDS: f64 = 1.0;
 
 /// Arguments of `normalnet batch`.
 #[derive(clap::Args)]
@@ -213,6 +219,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     bar.start(&format!("batch {}", info.name), files.len() as u64);
     let mut rows = Vec::with_capacity(files.len());
     let started = Instant::now();
+    let mut summary_written = Instant::now();
     let stems = output_stems(&files);
     if let Some(dup) = stems
         .iter()
@@ -258,15 +265,22 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 row.status = "failed";
                 row.error = Some(format!("{e:#}"));
                 if !quiet {
-                    eprintln!("{}: failed: {e:#}", input.display());
+                    stderr_line!("{}: failed: {e:#}", input.display());
                 }
             }
         }
         row.seconds = t.elapsed().as_secs_f64();
+        let failed = row.status == "failed";
         rows.push(row);
-        write_summary(&args.out, &rows)?;
+        // not after every file: the summary grows with the rows, and
+        // rewriting it after each of 20,000 files wrote tens of GB (issue 39)
+        if failed || summary_written.elapsed().as_secs_f64() >= SUMMARY_SECONDS {
+            write_summary(&args.out, &rows)?;
+            summary_written = Instant::now();
+        }
         bar.advance(1);
     }
+    write_summary(&args.out, &rows)?;
     bar.finish();
     let count = |s: &str| rows.iter().filter(|r| r.status == s).count();
     let mut out = std::io::stdout().lock();

@@ -676,7 +676,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                     load_start.elapsed().as_secs_f64(),
                 ));
                 if !quiet {
-                    eprintln!(
+                    stderr_line!(
                         "{model}: {} faces, noisy E_a {:.2} deg, E_v/l_e {:.4}",
                         noisy.num_faces(),
                         m.e_a_deg,
@@ -697,7 +697,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             run_index += 1;
             if settings.skips(model, method) {
                 if !quiet {
-                    eprintln!(
+                    stderr_line!(
                         "[{run_index}/{total_runs}] {model} {method}: skipped by the settings"
                     );
                 }
@@ -727,9 +727,10 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             match outcome {
                 Ok((result, denoise_s, metrics)) => {
                     if !quiet {
-                        eprintln!(
+                        stderr_line!(
                             "[{run_index}/{total_runs}] {model} {method}: E_a {:.2} deg, E_v/l_e {:.4}, {denoise_s:.2} s",
-                            metrics.e_a_deg, metrics.e_v_over_le
+                            metrics.e_a_deg,
+                            metrics.e_v_over_le
                         );
                     }
                     if args.save_meshes {
@@ -756,7 +757,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 }
                 Err(e) => {
                     if !quiet {
-                        eprintln!("[{run_index}/{total_runs}] {model} {method}: failed: {e:#}");
+                        stderr_line!("[{run_index}/{total_runs}] {model} {method}: failed: {e:#}");
                     }
                     report.records.push(failed(
                         model,
@@ -791,7 +792,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     write_report(&args.out, &report)
         .with_context(|| format!("writing the report into {}", args.out.display()))?;
     if !quiet {
-        eprintln!(
+        stderr_line!(
             "wrote {}/table.md, results.csv, results.json, index.html",
             args.out.display()
         );

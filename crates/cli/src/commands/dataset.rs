@@ -102,7 +102,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     crate::output::check_dir(&args.out)?;
     for input in &args.inputs {
         if let Some(t) = TEST_MODELS.iter().find(|t| input.contains(*t)) {
-            eprintln!(
+            stderr_line!(
                 "warning: {input} looks like the test model {t}: never train on it (data/SOURCES.md)"
             );
         }
@@ -185,7 +185,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         w.write_all(text.as_bytes())
     })?;
     if !quiet {
-        eprintln!(
+        stderr_line!(
             "wrote {n} samples ({:?} per A_p category >80/50-80/20-50/<=20) from {} sources to {}",
             per_cat,
             sources.len(),

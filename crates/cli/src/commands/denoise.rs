@@ -288,7 +288,7 @@ fn remove_outliers(mesh: Mesh) -> (Mesh, Option<Removed>) {
         return (mesh, None);
     }
     let Some((inner, _)) = without_vertices(&mesh, &outliers.mask) else {
-        eprintln!("warning: --remove-outliers: no face would be left; the mesh is kept whole");
+        stderr_line!("warning: --remove-outliers: no face would be left; the mesh is kept whole");
         return (mesh, None);
     };
     let removed = Removed {
@@ -296,9 +296,10 @@ fn remove_outliers(mesh: Mesh) -> (Mesh, Option<Removed>) {
         faces: mesh.num_faces() - inner.num_faces(),
         mask: outliers.mask,
     };
-    eprintln!(
+    stderr_line!(
         "--remove-outliers: dropped {} vertices and {} faces",
-        removed.vertices, removed.faces
+        removed.vertices,
+        removed.faces
     );
     (inner, Some(removed))
 }

@@ -69,7 +69,7 @@ pub fn check_ground_truth(
         let others = (f..gt.num_faces())
             .filter(|&g| gt.faces[g] != mesh.faces[g])
             .count();
-        eprintln!(
+        stderr_line!(
             "warning: {}: face {f} has vertices {:?}, but {} has {:?} ({others} faces differ); \
              same face count but different face index lists: normals compared face by face",
             gt_path.display(),

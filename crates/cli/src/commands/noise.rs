@@ -80,7 +80,7 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
         },
     )
     .with_context(|| format!("writing {}", args.output.display()))?;
-    eprintln!(
+    stderr_line!(
         "{}: {} noise, level {} (sigma {:.6} = {} x l_e {:.6}), {} of {} vertices moved along {:?}, seed {}",
         args.output.display(),
         if params.impulsive_fraction.is_some() {

@@ -116,7 +116,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         .write_png(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     if !quiet {
-        eprintln!(
+        stderr_line!(
             "wrote {} ({}x{}, {} faces) in {:.2} s",
             args.out.display(),
             image.width(),

@@ -85,7 +85,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         normalnet_mesh::io::write_atomically(preview, |w| w.write_all(&png))?;
     }
     if !quiet {
-        eprintln!(
+        stderr_line!(
             "wrote {} shapes ({} faces in all, {:.0} per shape) to {}",
             made.len(),
             faces,

@@ -69,7 +69,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     if !quiet {
         let n = voxelizer.mean_normals()[args.face];
-        eprintln!(
+        stderr_line!(
             "face {} of {}: {} cubes of {} occupied by {} faces; L_c = d_s/α_c = {:.4e}; mean normal ({:.4}, {:.4}, {:.4}); centre ({:.4}, {:.4}, {:.4}); wrote {}",
             args.face,
             args.mesh.display(),
