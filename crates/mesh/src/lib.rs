@@ -24,7 +24,10 @@ pub mod vec3;
 pub use csr::Csr;
 pub use error::MeshError;
 pub use geometry::FaceGeometry;
-pub use io::{Format, WriteOptions, read_mesh, read_mesh_as, write_mesh, write_mesh_as};
+pub use io::{
+    Attributes, FileWriteOptions, Format, MeshFile, WriteOptions, read_mesh, read_mesh_as,
+    read_mesh_file, write_mesh, write_mesh_as, write_mesh_file,
+};
 pub use mesh::Mesh;
 pub use metrics::{Metrics, compare, per_face_angle_errors};
 pub use noise::{NoiseDirection, NoiseParams, add_noise};
