@@ -7,6 +7,7 @@
 
 mod commands;
 mod input;
+mod mesh_output;
 mod output;
 mod progress;
 

@@ -26,7 +26,10 @@
 //!   order, types, and encoding (ASCII, binary little or big endian; ASCII
 //!   with [`FileWriteOptions::ply_ascii`]), header comments and `obj_info`
 //!   lines; `x y z` are written in their own type (a `float` file stays
-//!   `float`), vertex and face `nx ny nz` are recomputed (area-weighted);
+//!   `float`; integer-typed coordinates are rounded), vertex and face
+//!   `nx ny nz` are recomputed (area-weighted); a list property of the
+//!   face element other than `vertex_indices` is repeated unchanged on each
+//!   triangle when triangulating;
 //! - STL ([`StlAttributes`]): binary: the 80-byte header and each facet's
 //!   2-byte attribute; ASCII: the first solid's name (a file of several
 //!   solids is written as one, with a warning). Facet normals are recomputed.
@@ -78,7 +81,7 @@ pub struct Attributes {
     pub polygon_sizes: Vec<u32>,
     /// the folder of the file read, absolute when it could be made so
     /// (relative references such as OBJ `mtllib` are resolved from it);
-    /// `None` for a file parsed from memory without a path
+    /// `None` for a file parsed from memory ([`parse_mesh_file`])
     pub source_dir: Option<PathBuf>,
     /// the attributes of the format
     pub content: FormatAttributes,
@@ -174,7 +177,8 @@ pub fn read_mesh_file_as(path: impl AsRef<Path>, format: Format) -> Result<MeshF
 }
 
 /// Parses a mesh file from memory; `path` names it in errors and warnings
-/// (its folder becomes [`Attributes::source_dir`]).
+/// ([`Attributes::source_dir`] stays `None`: written back, OBJ `mtllib`
+/// names are kept as read).
 ///
 /// # Errors
 /// As [`read_mesh_file`].
@@ -217,7 +221,7 @@ pub fn parse_mesh_file(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh
     let attributes = Attributes {
         num_vertices,
         polygon_sizes,
-        source_dir: path.parent().map(Path::to_path_buf),
+        source_dir: None,
         content,
     };
     debug_assert_eq!(attributes.num_triangles(), mesh.num_faces());
@@ -270,10 +274,11 @@ pub fn write_mesh_file_as(
             },
         )?;
         return Ok(vec![format!(
-            "{}: written as {format:?} from a {:?} file: only positions and triangles are kept, \
+            "{}: written as {} from {} input: only positions and triangles are kept, \
              the input's {} dropped",
             path.display(),
-            attributes.format(),
+            format.name(),
+            attributes.format().name(),
             attributes.describe()
         )]);
     }

@@ -71,6 +71,16 @@ impl Format {
         }
     }
 
+    /// The format's usual name in text: `OBJ`, `OFF`, `PLY`, `STL`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Obj => "OBJ",
+            Format::Off => "OFF",
+            Format::Ply => "PLY",
+            Format::Stl => "STL",
+        }
+    }
+
     /// Parses a format name (`obj`, `off`, `ply`, `stl`; case-insensitive).
     pub fn from_name(name: &str) -> Option<Format> {
         Format::from_path(Path::new(&format!("x.{name}")))
