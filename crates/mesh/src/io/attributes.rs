@@ -466,6 +466,10 @@ pub(crate) fn push_polygon_size(
     Ok(())
 }
 
+/// What a reader that keeps attributes returns: positions, fan triangles,
+/// and the polygons' corner counts with the format's attributes.
+pub(crate) type ParsedWith<A> = (Vec<Vec3>, Vec<[u32; 3]>, (Vec<u32>, A));
+
 /// The folder of `path`, absolute (and with links resolved) where possible.
 fn absolute_dir(path: &Path) -> PathBuf {
     let dir = super::target_dir(path);

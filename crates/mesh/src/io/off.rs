@@ -9,7 +9,7 @@
 //! ([`OffAttributes`]); [`write_with_attributes`] writes them back, the
 //! vertex normals of an `NOFF` file recomputed.
 
-use super::attributes::{Polygons, push_polygon_size};
+use super::attributes::{ParsedWith, Polygons, push_polygon_size};
 use super::{fan, lines, parse_f64, parse_u64, perr, show, tokens};
 use crate::error::MeshError;
 use crate::mesh::Mesh;
@@ -66,7 +66,7 @@ fn tail_from(line: &[u8], t: Option<&[u8]>) -> String {
 pub(super) fn parse_with_attributes(
     bytes: &[u8],
     path: &Path,
-) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, (Vec<u32>, OffAttributes)), MeshError> {
+) -> Result<ParsedWith<OffAttributes>, MeshError> {
     let mut keep = Collector::default();
     let (positions, faces) = parse_into(bytes, path, Some(&mut keep))?;
     let mut a = keep.attributes;

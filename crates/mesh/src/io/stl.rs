@@ -15,7 +15,7 @@
 //! are matched in any case; every line must be the next statement of the
 //! grammar, and the file must end after an `endsolid`.
 
-use super::attributes::{Polygons, push_polygon_size};
+use super::attributes::{ParsedWith, Polygons, push_polygon_size};
 use super::{lines, parse_f64, perr, show, strip_bom, tokens};
 use crate::error::MeshError;
 use crate::geometry::triangle_normal;
@@ -88,7 +88,7 @@ struct Collector {
 pub(super) fn parse_with_attributes(
     bytes: &[u8],
     path: &Path,
-) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, (Vec<u32>, StlAttributes)), MeshError> {
+) -> Result<ParsedWith<StlAttributes>, MeshError> {
     let mut keep = Collector {
         attributes: StlAttributes {
             encoding: StlEncoding::Ascii {

@@ -8,7 +8,7 @@
 
 use super::{NO_INDEX, ObjAttributes, ObjStatement};
 use crate::error::MeshError;
-use crate::io::attributes::push_polygon_size;
+use crate::io::attributes::{ParsedWith, push_polygon_size};
 use crate::io::{fan, is_integer, lines, parse_f64, parse_i64, perr, show, tokens};
 use std::path::Path;
 
@@ -23,7 +23,7 @@ pub(in crate::io) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshErro
 pub(in crate::io) fn parse_with_attributes(
     bytes: &[u8],
     path: &Path,
-) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, (Vec<u32>, ObjAttributes)), MeshError> {
+) -> Result<ParsedWith<ObjAttributes>, MeshError> {
     let mut keep = Collector::default();
     let (positions, faces) = parse_into(bytes, path, Some(&mut keep))?;
     let attributes = keep.finish(path)?;

@@ -7,7 +7,7 @@
 
 use super::{PlyAttributes, PlyColumn, PlyElement, PlyEncoding, PlyHeaderLine, PlyProperty};
 use crate::error::MeshError;
-use crate::io::attributes::push_polygon_size;
+use crate::io::attributes::{ParsedWith, push_polygon_size};
 use crate::io::{fan, perr, show};
 use std::path::Path;
 
@@ -265,7 +265,7 @@ pub(in crate::io) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshErro
 pub(in crate::io) fn parse_with_attributes(
     bytes: &[u8],
     path: &Path,
-) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, (Vec<u32>, PlyAttributes)), MeshError> {
+) -> Result<ParsedWith<PlyAttributes>, MeshError> {
     let h = parse_header(bytes, path)?;
     let lay = layout(&h, path)?;
     let elements = h
