@@ -532,6 +532,23 @@ fn stl_binary_keeps_header_and_attribute_bytes() {
 }
 
 #[test]
+fn stl_padding_dropped_is_a_warning() {
+    let mut bytes = binary_stl();
+    bytes.extend_from_slice(&[0; 7]);
+    let file = parse(&bytes, Format::Stl);
+    assert_eq!(file.warnings.len(), 1, "{:?}", file.warnings);
+    assert!(
+        file.warnings[0].contains("7 bytes of padding"),
+        "{:?}",
+        file.warnings
+    );
+    assert_eq!(
+        encode(&file, &file.mesh, FileWriteOptions::default()),
+        binary_stl()
+    );
+}
+
+#[test]
 fn stl_ascii_keeps_its_solid_name_and_polygon_facets() {
     let text = "solid part 7\nfacet normal 0 0 1\n  outer loop\n    vertex 0 0 0\n    vertex 1 0 0\n    \
                 vertex 1 1 0\n    vertex 0 1 0\n  endloop\nendfacet\nendsolid part 7\n";

@@ -32,10 +32,12 @@
 //!   triangle when triangulating;
 //! - STL ([`StlAttributes`]): binary: the 80-byte header and each facet's
 //!   2-byte attribute; ASCII: the first solid's name (a file of several
-//!   solids is written as one, with a warning). Facet normals are recomputed.
+//!   solids is written as one, with a warning; so is padding after the last
+//!   binary facet, dropped). Facet normals are recomputed.
 //! - OFF ([`OffAttributes`]): the header keyword (`COFF`, `NOFF`, …), what
 //!   follows each vertex's x y z and each face's indices (colours) as
-//!   written. Comments are dropped (a warning says how many).
+//!   written. Comments are dropped (a warning says how many); the header's
+//!   edge count is written as 0.
 //!
 //! A mesh written in another format than it was read from keeps its
 //! positions and triangles only ([`write_mesh`]), with a warning naming what
@@ -211,6 +213,13 @@ pub fn parse_mesh_file(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh
                     "{}: {} more solids merged into the first (their names are dropped)",
                     path.display(),
                     stl.solids_merged
+                ));
+            }
+            if stl.padding_dropped > 0 {
+                warnings.push(format!(
+                    "{}: {} bytes of padding after the last facet dropped",
+                    path.display(),
+                    stl.padding_dropped
                 ));
             }
             (p, f, sizes, FormatAttributes::Stl(stl))

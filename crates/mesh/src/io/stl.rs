@@ -75,6 +75,8 @@ pub struct StlAttributes {
     pub facet_attributes: Vec<u16>,
     /// ASCII: number of `solid` blocks after the first, merged into it
     pub solids_merged: usize,
+    /// binary: bytes of padding after the last facet, read past
+    pub padding_dropped: usize,
 }
 
 /// What [`parse_with_attributes`] gathers on the way.
@@ -96,6 +98,7 @@ pub(super) fn parse_with_attributes(
             },
             facet_attributes: Vec::new(),
             solids_merged: 0,
+            padding_dropped: 0,
         },
         polygon_sizes: Vec::new(),
     };
@@ -142,6 +145,10 @@ fn parse_into(
     if bytes.len() > want && bytes.len() - want < RECORD {
         // Padding some writers add after the last triangle: less than one
         // more record, so no triangle can be lost by ignoring it.
+        let mut keep = keep;
+        if let Some(k) = keep.as_deref_mut() {
+            k.attributes.padding_dropped = bytes.len() - want;
+        }
         return parse_binary(&bytes[..want], n, path, keep);
     }
     Err(perr(
