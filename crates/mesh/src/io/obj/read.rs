@@ -69,9 +69,9 @@ impl Collector {
     }
 
     /// A `vt` or `vn` statement: 1..=3 (`vt`) or exactly 3 (`vn`) numbers.
-    fn values(
+    fn values<'a>(
         line: &[u8],
-        rest: &mut dyn Iterator<Item = &[u8]>,
+        rest: &mut impl Iterator<Item = &'a [u8]>,
         what: &str,
         path: &Path,
         ln: usize,
@@ -128,6 +128,83 @@ impl Collector {
             ));
         }
         Ok(abs as u32)
+    }
+
+    /// Any statement but `v`, `f` and comments: `vt` and `vn` parsed,
+    /// `mtllib` kept as its names, everything else verbatim.
+    fn statement<'a>(
+        &mut self,
+        kw: &[u8],
+        line: &[u8],
+        rest: &mut impl Iterator<Item = &'a [u8]>,
+        path: &Path,
+        ln: usize,
+    ) -> Result<(), MeshError> {
+        match kw {
+            b"vt" => {
+                let v = Collector::values(line, rest, "texture coordinate", path, ln)?;
+                self.attributes.texture_coords.push(v);
+                self.run(ObjStatement::TextureCoords);
+            }
+            b"vn" => {
+                let v = Collector::values(line, rest, "normal", path, ln)?;
+                self.attributes.normals.push([v[0], v[1], v[2]]);
+                self.run(ObjStatement::Normals);
+            }
+            b"mtllib" => {
+                let names = &line[line.len() - rest_len(line, kw)..];
+                self.attributes
+                    .statements
+                    .push(ObjStatement::MaterialLibrary(
+                        String::from_utf8_lossy(names.trim_ascii()).into_owned(),
+                    ));
+            }
+            _ => self
+                .attributes
+                .statements
+                .push(ObjStatement::Verbatim(line.to_vec())),
+        }
+        Ok(())
+    }
+
+    /// The texture and normal parts of a face corner `v/t/n` (after the
+    /// vertex part), resolved against the statements read so far.
+    fn corner<'a>(
+        &mut self,
+        parts: &mut impl Iterator<Item = &'a [u8]>,
+        path: &Path,
+        ln: usize,
+        face: usize,
+    ) -> Result<(), MeshError> {
+        let texture = parts.next().filter(|p| !p.is_empty());
+        let normal = parts.next().filter(|p| !p.is_empty());
+        let resolve = |part: Option<&[u8]>, count: usize, what: &str, forward: &mut Vec<_>| {
+            let Some(part) = part else {
+                return Ok(NO_INDEX);
+            };
+            let i = Collector::index(part, count, what, path, ln, face)?;
+            if i as usize >= count {
+                forward.push((ln, i));
+            }
+            Ok::<u32, MeshError>(i)
+        };
+        let t = resolve(
+            texture,
+            self.attributes.texture_coords.len(),
+            "texture coordinate",
+            &mut self.forward_texture,
+        )?;
+        let n = resolve(
+            normal,
+            self.attributes.normals.len(),
+            "normal",
+            &mut self.forward_normal,
+        )?;
+        self.any_texture |= t != NO_INDEX;
+        self.any_normal |= n != NO_INDEX;
+        self.attributes.corner_texture_coords.push(t);
+        self.attributes.corner_normals.push(n);
+        Ok(())
     }
 
     fn finish(mut self, path: &Path) -> Result<(Vec<u32>, ObjAttributes), MeshError> {
@@ -190,34 +267,7 @@ fn parse_into(
             [b'f' | b'F', b'o' | b'O'] => b"f",
             _ if is_keyword(kw) => {
                 if let Some(k) = keep.as_deref_mut() {
-                    match kw {
-                        b"vt" | b"vn" => {
-                            let texture = kw == b"vt";
-                            let what = if texture {
-                                "texture coordinate"
-                            } else {
-                                "normal"
-                            };
-                            let v = Collector::values(line, &mut tok, what, path, ln)?;
-                            if texture {
-                                k.attributes.texture_coords.push(v);
-                                k.run(ObjStatement::TextureCoords);
-                            } else {
-                                k.attributes.normals.push([v[0], v[1], v[2]]);
-                                k.run(ObjStatement::Normals);
-                            }
-                        }
-                        b"mtllib" => {
-                            let rest = &line[line.len() - rest_len(line, kw)..];
-                            k.attributes.statements.push(ObjStatement::MaterialLibrary(
-                                String::from_utf8_lossy(rest.trim_ascii()).into_owned(),
-                            ));
-                        }
-                        _ => k
-                            .attributes
-                            .statements
-                            .push(ObjStatement::Verbatim(line.to_vec())),
-                    }
+                    k.statement(kw, line, &mut tok, path, ln)?;
                 }
                 continue;
             }
@@ -283,43 +333,7 @@ fn parse_into(
                     let mut parts = t.split(|&b| b == b'/');
                     let idx = parts.next().unwrap_or(t);
                     if let Some(k) = keep.as_deref_mut() {
-                        let texture = parts.next().filter(|p| !p.is_empty());
-                        let normal = parts.next().filter(|p| !p.is_empty());
-                        let a = &mut k.attributes;
-                        let tc = match texture {
-                            Some(p) => {
-                                let n = a.texture_coords.len();
-                                let i = Collector::index(
-                                    p,
-                                    n,
-                                    "texture coordinate",
-                                    path,
-                                    ln,
-                                    faces.len(),
-                                )?;
-                                if i as usize >= n {
-                                    k.forward_texture.push((ln, i));
-                                }
-                                k.any_texture = true;
-                                i
-                            }
-                            None => NO_INDEX,
-                        };
-                        let nc = match normal {
-                            Some(p) => {
-                                let n = a.normals.len();
-                                let i = Collector::index(p, n, "normal", path, ln, faces.len())?;
-                                if i as usize >= n {
-                                    k.forward_normal.push((ln, i));
-                                }
-                                k.any_normal = true;
-                                i
-                            }
-                            None => NO_INDEX,
-                        };
-                        let a = &mut k.attributes;
-                        a.corner_texture_coords.push(tc);
-                        a.corner_normals.push(nc);
+                        k.corner(&mut parts, path, ln, faces.len())?;
                     }
                     let i = parse_i64(idx).ok_or_else(|| {
                         let what = if is_integer(idx) {
