@@ -73,6 +73,11 @@ pub struct MeshFile {
 
 /// What a file holds beyond positions and triangles, in a form that
 /// [`write_mesh_file`] writes back around new positions.
+///
+/// The fields are public to be read (colours, texture coordinates, extra
+/// properties). Changing values is fine; changing lengths (a per-vertex or
+/// per-corner array, a PLY column) breaks the writer's invariants and may
+/// make it panic: the counts must stay those of the file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attributes {
     /// number of vertices of the file (the mesh written must have as many)
@@ -118,11 +123,18 @@ impl Attributes {
         self.polygon_sizes.iter().map(|&n| n as usize - 2).sum()
     }
 
-    /// Checks that `mesh` has the vertex count and triangles of the file.
+    /// Checks that `mesh` has the vertex count and triangles of the file
+    /// (and that every polygon has at least 3 corners).
     ///
     /// # Errors
     /// [`MeshError::Mismatch`] saying which count differs.
     pub fn check_matches(&self, mesh: &Mesh) -> Result<(), MeshError> {
+        if let Some(p) = self.polygon_sizes.iter().position(|&n| n < 3) {
+            return Err(MeshError::Mismatch(format!(
+                "polygon {p} of the attributes has {} corners, at least 3 expected",
+                self.polygon_sizes[p]
+            )));
+        }
         if mesh.num_vertices() != self.num_vertices || mesh.num_faces() != self.num_triangles() {
             return Err(MeshError::Mismatch(format!(
                 "the mesh has {} vertices and {} faces, its attributes were read from a file \
