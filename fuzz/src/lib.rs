@@ -37,3 +37,44 @@ pub fn check_reader(bytes: &[u8], format: Format) {
         }
     }
 }
+
+/// Parses `bytes` with the attribute-keeping reader (`parse_mesh_file`) and
+/// panics (a fuzz failure) unless: its mesh is the one `parse_mesh` reads;
+/// a mesh it accepts encodes with its attributes (`encode_mesh_file`), that
+/// encoding reads back with the same mesh (bit-exact positions, same faces
+/// and polygons), and encoding it again gives the same bytes (nothing the
+/// reader keeps is lost or changed by a second round).
+pub fn check_file_reader(bytes: &[u8], format: Format) {
+    use normalnet_mesh::io::{FileWriteOptions, encode_mesh_file, parse_mesh_file};
+    let path = Path::new("fuzz-input");
+    let plain = parse_mesh(bytes, format, path);
+    let Ok(file) = parse_mesh_file(bytes, format, path) else {
+        // the attribute reader is stricter (vt / vn must be numbers and
+        // their indices in range), never more lenient
+        return;
+    };
+    assert_eq!(
+        plain.as_ref().ok(),
+        Some(&file.mesh),
+        "parse_mesh_file read another mesh than parse_mesh"
+    );
+    let options = FileWriteOptions::default();
+    let encoded = encode_mesh_file(&file.mesh, &file.attributes, &options)
+        .unwrap_or_else(|e| panic!("a file the reader accepted cannot be written: {e}"));
+    let again = parse_mesh_file(&encoded, format, path)
+        .unwrap_or_else(|e| panic!("a file the reader accepted does not read back: {e}"));
+    assert_eq!(again.mesh.faces, file.mesh.faces, "faces changed");
+    assert_eq!(
+        again.attributes.polygon_sizes, file.attributes.polygon_sizes,
+        "polygons changed"
+    );
+    if format != Format::Stl {
+        let bits = |m: &normalnet_mesh::Mesh| -> Vec<u64> {
+            m.positions.iter().flatten().map(|x| x.to_bits()).collect()
+        };
+        assert_eq!(bits(&again.mesh), bits(&file.mesh), "coordinates changed");
+    }
+    let twice = encode_mesh_file(&again.mesh, &again.attributes, &options)
+        .unwrap_or_else(|e| panic!("the written file cannot be written again: {e}"));
+    assert!(twice == encoded, "a second write → read → write changed the file");
+}

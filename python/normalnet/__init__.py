@@ -23,6 +23,7 @@ import math
 import os
 import struct
 import time
+import warnings
 import zlib
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -232,7 +233,10 @@ def denoise_file(
     (``input``, ``output``, ``status`` = done / skipped / failed, ``faces``,
     ``seconds``, ``error``) — the unit of work of :mod:`normalnet.distributed`
     and of ``normalnet batch``. Never raises for a bad mesh: the error goes
-    into the row; never leaves a partial output."""
+    into the row; never leaves a partial output. The output keeps what the
+    input file carries beyond positions and triangles (polygons, texture
+    coordinates, materials, colours, extra PLY properties; issue 38), and a
+    :class:`UserWarning` says what could not be kept."""
     input, output = os.fspath(input), os.fspath(output)
     row: Dict[str, Any] = {"input": input, "output": output, "method": method,
                            "status": "done", "faces": None, "seconds": 0.0, "error": None}
@@ -244,7 +248,9 @@ def denoise_file(
         v, f = read_mesh(input)
         row["faces"] = int(f.shape[0])
         out = denoise(v, f, method, **params)
-        write_mesh(output, out, f)
+        out_v, out_f = _mesh(out, f)
+        for message in _normalnet.write_mesh_like(os.fspath(output), out_v, out_f, input):
+            warnings.warn(message, stacklevel=2)
     except (ValueError, OSError, RuntimeError) as e:
         row["status"] = "failed"
         row["error"] = str(e)

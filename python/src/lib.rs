@@ -215,6 +215,45 @@ fn write_mesh<'py>(
         .map_err(mesh_error)
 }
 
+/// Writes `vertices` (new positions of the mesh read from `input`, e.g.
+/// denoised; `faces` as read) to `path` with everything else `input`
+/// carries (issue 38: polygons, texture coordinates, materials, groups,
+/// colours, extra PLY properties, STL attribute bytes; normals recomputed),
+/// atomically; returns the warnings (what could not be kept). A mesh whose
+/// counts differ from `input` is written without them (and a warning).
+#[pyfunction]
+fn write_mesh_like<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    input: std::path::PathBuf,
+) -> PyResult<Vec<String>> {
+    let mesh = mesh_from(&vertices, &faces)?;
+    py.detach(|| -> Result<Vec<String>, MeshError> {
+        let file = normalnet_mesh::read_mesh_file(&input)?;
+        let mut warnings = file.warnings;
+        match file.attributes.check_matches(&mesh) {
+            Ok(()) => warnings.extend(normalnet_mesh::write_mesh_file(
+                &path,
+                &mesh,
+                &file.attributes,
+                &normalnet_mesh::FileWriteOptions::default(),
+            )?),
+            Err(e) => {
+                normalnet_mesh::write_mesh(&path, &mesh)?;
+                warnings.push(format!(
+                    "{}: written without the attributes of {} ({e})",
+                    path.display(),
+                    input.display()
+                ));
+            }
+        }
+        Ok(warnings)
+    })
+    .map_err(mesh_error)
+}
+
 /// Renders to an `H×W×3` uint8 image; with gt, faces coloured by error.
 #[pyfunction]
 #[pyo3(signature = (vertices, faces, gt_vertices, gt_faces, width, height, azimuth, elevation, title, max_error))]
@@ -262,6 +301,7 @@ fn _normalnet(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(write_mesh_like, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

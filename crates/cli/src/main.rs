@@ -11,6 +11,7 @@
 mod stderr;
 mod commands;
 mod input;
+mod mesh_output;
 mod output;
 mod progress;
 

@@ -120,6 +120,24 @@ pub fn vertex_normals(mesh: &Mesh, face_normals: &[Vec3]) -> Vec<Vec3> {
     sum.into_iter().map(vec3::normalize_or_zero).collect()
 }
 
+/// Area-weighted vertex normals, one unit `[f64; 3]` per vertex (len #V):
+/// the normalised sum of `(q − p) × (r − p)` (twice the area times the unit
+/// normal) over the faces around each vertex, in face order (so the bits do
+/// not depend on the thread count). Zero for isolated vertices and where the
+/// sum vanishes. What the attribute writers ([`crate::io::write_mesh_file`])
+/// store as the normals of a denoised surface.
+pub fn area_weighted_vertex_normals(mesh: &Mesh) -> Vec<Vec3> {
+    let mut sum = vec![[0.0; 3]; mesh.num_vertices()];
+    for (f, t) in mesh.faces.iter().enumerate() {
+        let [p, q, r] = mesh.corners(f);
+        let x = vec3::cross(vec3::sub(q, p), vec3::sub(r, p));
+        for &v in t {
+            sum[v as usize] = vec3::add(sum[v as usize], x);
+        }
+    }
+    sum.into_iter().map(vec3::normalize_or_zero).collect()
+}
+
 /// Chunk length of the deterministic parallel sums below.
 const SUM_CHUNK: usize = 4096;
 

@@ -1,6 +1,7 @@
 //! Triangle meshes for NormalNet: the `Mesh` (positions + faces), its
 //! `Topology` (flat CSR connectivity, r-rings), per-face geometry, file I/O
-//! (OBJ, OFF, PLY, STL), the noise models of the literature and the error
+//! (OBJ, OFF, PLY, STL; with `read_mesh_file` / `write_mesh_file`, also
+//! what a file carries beyond positions and triangles), the noise models of the literature and the error
 //! metrics E_a / E_v (SPEC §1–3).
 //!
 //! Everything downstream (filters, voxelizer, network, CLI) starts here; this
@@ -24,7 +25,10 @@ pub mod vec3;
 pub use csr::Csr;
 pub use error::MeshError;
 pub use geometry::FaceGeometry;
-pub use io::{Format, WriteOptions, read_mesh, read_mesh_as, write_mesh, write_mesh_as};
+pub use io::{
+    Attributes, FileWriteOptions, Format, MeshFile, WriteOptions, read_mesh, read_mesh_as,
+    read_mesh_file, write_mesh, write_mesh_as, write_mesh_file,
+};
 pub use mesh::Mesh;
 pub use metrics::{Metrics, compare, per_face_angle_errors};
 pub use noise::{NoiseDirection, NoiseParams, add_noise};

@@ -12,6 +12,8 @@
 //! at the end (a killed run's summary is up to a second behind; the
 //! outputs, not the summary, decide what a rerun skips). The output folder may not be
 //! the folder of an input (outputs would replace or join the inputs).
+//! Outputs keep what their input file carries, as with `denoise` (issue
+//! 38; `--triangulate` for triangles instead of the input's polygons).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -23,8 +25,10 @@ use normalnet_mesh::{NoProgress, Progress};
 use serde::Serialize;
 
 use super::denoise::{MethodArgs, given_params};
+use crate::mesh_output::write_result;
 use crate::output;
 use crate::progress::Bar;
+use normalnet_mesh::io::FileWriteOptions;
 
 /// The summary is rewritten at most this often (seconds), besides after
 /// each failure and at the end.
@@ -45,6 +49,9 @@ pub struct Args {
     /// Redo inputs whose output exists.
     #[arg(long)]
     pub overwrite: bool,
+    /// Write triangles instead of each input's polygons.
+    #[arg(long)]
+    pub triangulate: bool,
     /// The method and its parameters.
     #[command(flatten)]
     pub choice: MethodArgs,
@@ -253,12 +260,17 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             let result = (|| -> anyhow::Result<()> {
                 output::check_not_input(&output, &[input])?;
                 normalnet_mesh::io::check_writable(&output)?;
-                let mesh = crate::input::read_mesh(input)?;
+                let file = crate::input::read_mesh_file(input)?;
+                let mesh = &file.mesh;
                 row.faces = Some(mesh.num_faces());
                 let format = super::info::format_for(&output, None)?;
-                normalnet_mesh::io::check_encodable(&output, &mesh, format)?;
-                let out = denoiser.denoise(&mesh, None, &NoProgress)?;
-                normalnet_mesh::write_mesh(&output, &out)?;
+                normalnet_mesh::io::check_encodable(&output, mesh, format)?;
+                let out = denoiser.denoise(mesh, None, &NoProgress)?;
+                let options = FileWriteOptions {
+                    triangulate: args.triangulate,
+                    ply_ascii: false,
+                };
+                write_result(&output, format, &out, &file.attributes, input, &options)?;
                 Ok(())
             })();
             if let Err(e) = result {

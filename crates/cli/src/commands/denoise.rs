@@ -11,6 +11,13 @@
 //! keep the method's defaults, which `--help` shows. A flag that does not
 //! apply to the chosen method is an error rather than silently ignored.
 //!
+//! The output keeps what the input file carries (issue 38,
+//! `normalnet_mesh::io::attributes`): an output in the input's format gets
+//! its polygons, texture coordinates, materials, groups, colours, extra PLY
+//! properties and STL attribute bytes back around the denoised positions,
+//! normals recomputed; `--triangulate` writes triangles instead of the
+//! polygons. What cannot be kept is said on stderr.
+//!
 //! Outlier vertices (issue 14, `normalnet_mesh::outliers`) are warned about
 //! on reading; every method leaves them and their faces out of the
 //! denoising and in place, and `--remove-outliers` drops them (and their
@@ -18,16 +25,17 @@
 
 use super::info::format_for;
 use super::metrics::check_ground_truth;
-use crate::input::read_mesh;
+use crate::input::{read_mesh, read_mesh_file};
+use crate::mesh_output::write_result;
 use crate::output;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_denoise::params::{MAX_ITERATIONS, parse_assignment};
 use normalnet_denoise::{Denoiser, METHODS, MethodInfo, Params};
-use normalnet_mesh::io::check_encodable;
+use normalnet_mesh::Mesh;
+use normalnet_mesh::io::{FileWriteOptions, check_encodable};
 use normalnet_mesh::metrics::compare;
 use normalnet_mesh::outliers::{OutlierParams, outlier_vertices, without_vertices};
-use normalnet_mesh::{Mesh, write_mesh};
 use serde_json::{Value, json};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -214,6 +222,10 @@ pub struct Args {
     /// and their faces in place and denoises the rest around them.
     #[arg(long)]
     pub remove_outliers: bool,
+    /// Write triangles (the fan triangulation the denoiser worked on)
+    /// instead of the input's polygons.
+    #[arg(long)]
+    pub triangulate: bool,
 }
 
 /// The parameters the flags give for `info` (shorthand flags mapped onto
@@ -321,9 +333,11 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     output::check_not_input(&args.output, &inputs)?;
     // parameters checked and the model loaded before the mesh is read
     let denoiser = Denoiser::new(info.name, &given_params(&args.choice, info)?)?;
-    let mesh =
-        read_mesh(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
-    check_encodable(&args.output, &mesh, format_for(&args.output, None)?).with_context(|| {
+    let file =
+        read_mesh_file(&args.input).with_context(|| format!("reading {}", args.input.display()))?;
+    let (mesh, attributes) = (file.mesh, file.attributes);
+    let out_format = format_for(&args.output, None)?;
+    check_encodable(&args.output, &mesh, out_format).with_context(|| {
         format!(
             "{}: its coordinates do not fit the output format",
             args.input.display()
@@ -367,8 +381,17 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let (result, stages) = (outcome.mesh, outcome.stages);
     let parameters = denoiser.parameters();
     let denoise_seconds = t_denoise.elapsed().as_secs_f64();
-    write_mesh(&args.output, &result)
-        .with_context(|| format!("writing {}", args.output.display()))?;
+    write_result(
+        &args.output,
+        out_format,
+        &result,
+        &attributes,
+        &args.input,
+        &FileWriteOptions {
+            triangulate: args.triangulate,
+            ply_ascii: false,
+        },
+    )?;
     let metrics = match &gt {
         Some(gt) => Some(compare(gt, &result).context("computing metrics")?),
         None => None,

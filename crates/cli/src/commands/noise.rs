@@ -1,11 +1,14 @@
 //! `normalnet noise`: adds the literature's synthetic noise to a clean mesh
 //! (SPEC §2, `normalnet_mesh::noise`): `σ = L·l_e`, Gaussian or impulsive,
-//! along the clean vertex normals or random directions, seeded.
+//! along the clean vertex normals or random directions, seeded. The output
+//! keeps what the input file carries, as with `denoise` (issue 38;
+//! `--triangulate` for triangles instead of the input's polygons).
 
 use super::info::{format_for, parse_format};
-use crate::input::read_mesh_as;
+use crate::input::read_mesh_file_as;
+use crate::mesh_output::write_result;
 use anyhow::Context;
-use normalnet_mesh::io::{Format, WriteOptions, check_encodable, write_mesh_as};
+use normalnet_mesh::io::{FileWriteOptions, Format, check_encodable};
 use normalnet_mesh::noise::{NoiseDirection, NoiseParams, add_noise_with_info};
 use std::path::PathBuf;
 
@@ -31,9 +34,13 @@ pub struct Args {
     /// Read the input as this format whatever its extension.
     #[arg(long, value_parser = parse_format)]
     pub format: Option<Format>,
-    /// Write PLY output as ASCII instead of binary.
+    /// Write PLY output as ASCII (default: a PLY input's encoding, binary
+    /// for any other input).
     #[arg(long)]
     pub ply_ascii: bool,
+    /// Write triangles instead of the input's polygons.
+    #[arg(long)]
+    pub triangulate: bool,
 }
 
 /// `--direction` values.
@@ -49,10 +56,11 @@ pub enum Direction {
 pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     crate::output::check_file(&args.output, crate::output::MESH, "output mesh")?;
     crate::output::check_not_input(&args.output, &[&args.input])?;
-    let clean = read_mesh_as(&args.input, format_for(&args.input, args.format)?)
+    let file = read_mesh_file_as(&args.input, format_for(&args.input, args.format)?)
         .with_context(|| format!("reading {}", args.input.display()))?;
+    let clean = &file.mesh;
     let out_format = format_for(&args.output, None)?;
-    check_encodable(&args.output, &clean, out_format).with_context(|| {
+    check_encodable(&args.output, clean, out_format).with_context(|| {
         format!(
             "{}: its coordinates do not fit the output format",
             args.input.display()
@@ -69,17 +77,19 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
         },
         seed: args.seed,
     };
-    let (noisy, info) = add_noise_with_info(&clean, &params)
+    let (noisy, info) = add_noise_with_info(clean, &params)
         .with_context(|| format!("adding noise to {}", args.input.display()))?;
-    write_mesh_as(
+    write_result(
         &args.output,
-        &noisy,
         out_format,
-        &WriteOptions {
+        &noisy,
+        &file.attributes,
+        &args.input,
+        &FileWriteOptions {
+            triangulate: args.triangulate,
             ply_ascii: args.ply_ascii,
         },
-    )
-    .with_context(|| format!("writing {}", args.output.display()))?;
+    )?;
     stderr_line!(
         "{}: {} noise, level {} (sigma {:.6} = {} x l_e {:.6}), {} of {} vertices moved along {:?}, seed {}",
         args.output.display(),

@@ -5,8 +5,11 @@
 //! - vertex order and face order of the file are kept; polygons are
 //!   fan-triangulated `(v0, v_i, v_{i+1})` in file order, so the error metrics
 //!   can compare meshes face by face;
-//! - attributes other than positions and face indices (texture coordinates,
-//!   normals, colours, extra PLY properties) are read past and dropped;
+//! - [`read_mesh`] reads past attributes other than positions and face
+//!   indices (texture coordinates, normals, colours, extra PLY properties,
+//!   groups, materials) and [`write_mesh`] writes positions and triangles
+//!   only; [`read_mesh_file`] / [`write_mesh_file`] keep them
+//!   ([`attributes`] says what each format keeps);
 //! - only STL, which has no shared vertices, merges bit-identical coincident
 //!   vertices (in order of first appearance);
 //! - any defect (truncated file, bad index, non-finite coordinate, wrong
@@ -24,10 +27,17 @@
 //!   an output that is a symbolic link is written through (its target gets
 //!   the mesh, the link stays) and a read-only output file is refused.
 
+pub mod attributes;
 mod obj;
 mod off;
 mod ply;
 mod stl;
+
+pub use attributes::{
+    Attributes, FileWriteOptions, FormatAttributes, MeshFile, encode_mesh_file, parse_mesh_file,
+    read_mesh_file, read_mesh_file_as, write_mesh_file, write_mesh_file_as,
+};
+pub use obj::NO_INDEX;
 
 use crate::error::MeshError;
 use crate::mesh::Mesh;
@@ -58,6 +68,16 @@ impl Format {
             "ply" => Some(Format::Ply),
             "stl" => Some(Format::Stl),
             _ => None,
+        }
+    }
+
+    /// The format's usual name in text: `OBJ`, `OFF`, `PLY`, `STL`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Obj => "OBJ",
+            Format::Off => "OFF",
+            Format::Ply => "PLY",
+            Format::Stl => "STL",
         }
     }
 

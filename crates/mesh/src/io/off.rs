@@ -3,8 +3,13 @@
 //! ignored), one polygon per line `n i_1 … i_n [colour]` (0-based,
 //! fan-triangulated). The header keyword is matched case-insensitively
 //! (`OFF`, `off`, `COFF`, `NOFF`, `STCNOFF`, …); binary, 4D and n-dimensional
-//! (`nOFF`) files are refused.
+//! (`nOFF`) files are refused. [`parse_with_attributes`] keeps the header
+//! keyword and what follows each vertex's coordinates and each face's
+//! indices (colours, normals, texture coordinates) as written
+//! ([`OffAttributes`]); [`write_with_attributes`] writes them back, the
+//! vertex normals of an `NOFF` file recomputed.
 
+use super::attributes::{ParsedWith, Polygons, push_polygon_size};
 use super::{fan, lines, parse_f64, parse_u64, perr, show, tokens};
 use crate::error::MeshError;
 use crate::mesh::Mesh;
@@ -13,11 +18,86 @@ use std::path::Path;
 
 type Parsed = (Vec<[f64; 3]>, Vec<[u32; 3]>);
 
+/// What an OFF file holds beyond positions and triangles.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct OffAttributes {
+    /// the header keyword as written (`OFF`, `COFF`, `NOFF`, `STCOFF`, …)
+    pub keyword: String,
+    /// per vertex, the text after x y z (normal, colour, texture
+    /// coordinates), trimmed; empty when no vertex has any (len #V or 0)
+    pub vertex_tails: Vec<String>,
+    /// per polygon, the text after its indices (a colour), trimmed; empty
+    /// when no face has any (len #polygons or 0)
+    pub face_tails: Vec<String>,
+    /// number of comments (`#` to the line end) read past
+    pub comments_dropped: usize,
+}
+
+impl OffAttributes {
+    /// Whether the vertices carry normals (`N` in the header keyword): the
+    /// first three values of each vertex tail, recomputed on writing.
+    pub fn has_vertex_normals(&self) -> bool {
+        let upper = self.keyword.to_ascii_uppercase();
+        upper
+            .strip_suffix("OFF")
+            .is_some_and(|prefix| prefix.ends_with('N'))
+    }
+}
+
+/// What [`parse_with_attributes`] gathers on the way.
+#[derive(Default)]
+struct Collector {
+    attributes: OffAttributes,
+    polygon_sizes: Vec<u32>,
+}
+
+/// The trimmed text of `line` from the token `t` (a slice of it) on.
+fn tail_from(line: &[u8], t: Option<&[u8]>) -> String {
+    match t {
+        Some(t) => {
+            let start = t.as_ptr() as usize - line.as_ptr() as usize;
+            String::from_utf8_lossy(line[start..].trim_ascii()).into_owned()
+        }
+        None => String::new(),
+    }
+}
+
+/// Positions, fan triangles, polygon sizes and the attributes of an OFF file.
+pub(super) fn parse_with_attributes(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<ParsedWith<OffAttributes>, MeshError> {
+    let mut keep = Collector::default();
+    let (positions, faces) = parse_into(bytes, path, Some(&mut keep))?;
+    let mut a = keep.attributes;
+    if a.vertex_tails.iter().all(String::is_empty) {
+        a.vertex_tails = Vec::new();
+    }
+    if a.face_tails.iter().all(String::is_empty) {
+        a.face_tails = Vec::new();
+    }
+    Ok((positions, faces, (keep.polygon_sizes, a)))
+}
+
+/// Positions and fan triangles of an OFF file.
 pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
+    parse_into(bytes, path, None)
+}
+
+/// The one OFF parser; `keep` gathers the attributes when given.
+fn parse_into(
+    bytes: &[u8],
+    path: &Path,
+    mut keep: Option<&mut Collector>,
+) -> Result<Parsed, MeshError> {
+    let mut comments = 0;
     // Non-empty, comment-stripped lines.
     let mut it = lines(bytes).filter_map(|(ln, l)| {
         let l = match l.iter().position(|&b| b == b'#') {
-            Some(i) => &l[..i],
+            Some(i) => {
+                comments += 1;
+                &l[..i]
+            }
             None => l,
         };
         if tokens(l).next().is_some() {
@@ -32,6 +112,9 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     let mut head = tokens(first);
     let kw = head.next().unwrap_or_default();
     header(kw).map_err(|m| perr(path, ln, m))?;
+    if let Some(k) = keep.as_deref_mut() {
+        k.attributes.keyword = String::from_utf8_lossy(kw).into_owned();
+    }
     let mut counts: Vec<(usize, &[u8])> = head.map(|t| (ln, t)).collect();
     if counts
         .first()
@@ -100,6 +183,9 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
             }
         }
         positions.push(p);
+        if let Some(k) = keep.as_deref_mut() {
+            k.attributes.vertex_tails.push(tail_from(l, tok.next()));
+        }
     }
     let mut faces = Vec::with_capacity(nf.min(bytes.len() / 6));
     let mut poly = Vec::with_capacity(8);
@@ -150,6 +236,10 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
             poly.push(i as u32);
         }
         fan(&poly, &mut faces);
+        if let Some(k) = keep.as_deref_mut() {
+            k.attributes.face_tails.push(tail_from(l, tok.next()));
+            push_polygon_size(&mut k.polygon_sizes, poly.len(), path, ln)?;
+        }
     }
     if let Some((ln, _)) = it.next() {
         return Err(perr(
@@ -157,6 +247,10 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
             ln,
             format!("data after the {nv} vertices and {nf} faces the header announces"),
         ));
+    }
+    drop(it);
+    if let Some(k) = keep {
+        k.attributes.comments_dropped = comments;
     }
     Ok((positions, faces))
 }
@@ -190,6 +284,59 @@ pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     }
     for f in &mesh.faces {
         writeln!(w, "3 {} {} {}", f[0], f[1], f[2])?;
+    }
+    Ok(())
+}
+
+/// Writes `mesh` with the header keyword, vertex tails and face tails of
+/// `off` (a triangle of a triangulated polygon takes its polygon's); the
+/// normals of an `NOFF` file are recomputed (area-weighted).
+pub(super) fn write_with_attributes(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    polygons: &Polygons,
+    off: &OffAttributes,
+) -> std::io::Result<()> {
+    let keyword = if off.keyword.is_empty() {
+        "OFF"
+    } else {
+        &off.keyword
+    };
+    writeln!(
+        w,
+        "{keyword}\n{} {} 0",
+        mesh.num_vertices(),
+        polygons.count()
+    )?;
+    let normals = off
+        .has_vertex_normals()
+        .then(|| crate::geometry::area_weighted_vertex_normals(mesh));
+    for (v, p) in mesh.positions.iter().enumerate() {
+        write!(w, "{} {} {}", p[0], p[1], p[2])?;
+        let tail = off.vertex_tails.get(v).map(String::as_str).unwrap_or("");
+        match &normals {
+            Some(n) => {
+                let n = n[v];
+                let rest: Vec<&str> = tail.split_ascii_whitespace().skip(3).collect();
+                write!(w, " {} {} {}", n[0], n[1], n[2])?;
+                for t in rest {
+                    write!(w, " {t}")?;
+                }
+            }
+            None if !tail.is_empty() => write!(w, " {tail}")?,
+            None => {}
+        }
+        writeln!(w)?;
+    }
+    for polygon in polygons.iter(&mesh.positions) {
+        write!(w, "{}", polygon.vertices.len())?;
+        for v in &polygon.vertices {
+            write!(w, " {v}")?;
+        }
+        match off.face_tails.get(polygon.source) {
+            Some(tail) if !tail.is_empty() => writeln!(w, " {tail}")?,
+            _ => writeln!(w)?,
+        }
     }
     Ok(())
 }

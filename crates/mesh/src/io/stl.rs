@@ -2,7 +2,10 @@
 //! (`solid … facet normal … outer loop vertex ×3 endloop endfacet … endsolid`).
 //! STL stores each triangle's corners separately: bit-identical corners are
 //! merged into one vertex (first appearance order); nothing else is merged.
-//! The stored facet normals are ignored.
+//! The stored facet normals are ignored. [`parse_with_attributes`] also
+//! keeps the binary header and each facet's 2-byte attribute, or the ASCII
+//! solid's name and each facet's corner count ([`StlAttributes`]);
+//! [`write_with_attributes`] writes them back, normals recomputed.
 //!
 //! Binary or ASCII is decided by the size rule first (a binary file has
 //! exactly 84 + 50·n bytes, whatever its header says), then by the content
@@ -12,6 +15,7 @@
 //! are matched in any case; every line must be the next statement of the
 //! grammar, and the file must end after an `endsolid`.
 
+use super::attributes::{ParsedWith, Polygons, push_polygon_size};
 use super::{lines, parse_f64, perr, show, strip_bom, tokens};
 use crate::error::MeshError;
 use crate::geometry::triangle_normal;
@@ -46,7 +50,73 @@ impl Welder {
     }
 }
 
+/// How an STL file was stored, with what that encoding carries.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StlEncoding {
+    /// binary, with its 80-byte header
+    Binary {
+        /// the header as read
+        header: Vec<u8>,
+    },
+    /// ASCII, with the name after the first `solid` (trimmed; may be empty)
+    Ascii {
+        /// the solid's name
+        name: String,
+    },
+}
+
+/// What an STL file holds beyond its triangles.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StlAttributes {
+    /// binary with its header, or ASCII with its solid's name
+    pub encoding: StlEncoding,
+    /// binary: each facet's 2-byte attribute (len #F; colour in some
+    /// writers); ASCII: empty
+    pub facet_attributes: Vec<u16>,
+    /// ASCII: number of `solid` blocks after the first, merged into it
+    pub solids_merged: usize,
+    /// binary: bytes of padding after the last facet, read past
+    pub padding_dropped: usize,
+}
+
+/// What [`parse_with_attributes`] gathers on the way.
+struct Collector {
+    attributes: StlAttributes,
+    polygon_sizes: Vec<u32>,
+}
+
+/// Positions (welded), fan triangles, facet corner counts and the
+/// attributes of an STL file.
+pub(super) fn parse_with_attributes(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<ParsedWith<StlAttributes>, MeshError> {
+    let mut keep = Collector {
+        attributes: StlAttributes {
+            encoding: StlEncoding::Ascii {
+                name: String::new(),
+            },
+            facet_attributes: Vec::new(),
+            solids_merged: 0,
+            padding_dropped: 0,
+        },
+        polygon_sizes: Vec::new(),
+    };
+    let (positions, faces) = parse_into(bytes, path, Some(&mut keep))?;
+    Ok((positions, faces, (keep.polygon_sizes, keep.attributes)))
+}
+
+/// Positions (welded) and triangles of an STL file.
 pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
+    parse_into(bytes, path, None)
+}
+
+/// The one STL parser; `keep` gathers the attributes when given.
+fn parse_into(
+    bytes: &[u8],
+    path: &Path,
+    keep: Option<&mut Collector>,
+) -> Result<Parsed, MeshError> {
     if bytes.is_empty() {
         return Err(perr(path, 0, "no mesh in file: empty STL file"));
     }
@@ -55,11 +125,11 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     if let Some(n) = count
         && bytes.len() == binary_len(n)
     {
-        return parse_binary(bytes, n, path);
+        return parse_binary(bytes, n, path, keep);
     }
     let text = strip_bom(bytes);
     if looks_ascii(text) {
-        return parse_ascii(text, path);
+        return parse_ascii(text, path, keep);
     }
     let Some(n) = count else {
         return Err(perr(
@@ -75,7 +145,11 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     if bytes.len() > want && bytes.len() - want < RECORD {
         // Padding some writers add after the last triangle: less than one
         // more record, so no triangle can be lost by ignoring it.
-        return parse_binary(&bytes[..want], n, path);
+        let mut keep = keep;
+        if let Some(k) = keep.as_deref_mut() {
+            k.attributes.padding_dropped = bytes.len() - want;
+        }
+        return parse_binary(&bytes[..want], n, path, keep);
     }
     Err(perr(
         path,
@@ -119,7 +193,19 @@ fn looks_ascii(text: &[u8]) -> bool {
         && tokens(head).any(|t| keyword(t, b"facet") || keyword(t, b"endsolid"))
 }
 
-fn parse_binary(bytes: &[u8], n: usize, path: &Path) -> Result<Parsed, MeshError> {
+fn parse_binary(
+    bytes: &[u8],
+    n: usize,
+    path: &Path,
+    mut keep: Option<&mut Collector>,
+) -> Result<Parsed, MeshError> {
+    if let Some(k) = keep.as_deref_mut() {
+        k.attributes.encoding = StlEncoding::Binary {
+            header: bytes[..80].to_vec(),
+        };
+        k.attributes.facet_attributes = Vec::with_capacity(n);
+        k.polygon_sizes = vec![3; n];
+    }
     let mut weld = Welder::new(n / 2 + 3);
     let mut faces = Vec::with_capacity(n);
     for (t, rec) in bytes[84..].chunks_exact(50).enumerate() {
@@ -143,6 +229,11 @@ fn parse_binary(bytes: &[u8], n: usize, path: &Path) -> Result<Parsed, MeshError
             *idx = weld.index(p);
         }
         faces.push(tri);
+        if let Some(k) = keep.as_deref_mut() {
+            k.attributes
+                .facet_attributes
+                .push(u16::from_le_bytes([rec[48], rec[49]]));
+        }
     }
     Ok((weld.positions, faces))
 }
@@ -158,7 +249,12 @@ enum State {
     FacetDone,
 }
 
-fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
+fn parse_ascii(
+    bytes: &[u8],
+    path: &Path,
+    mut keep: Option<&mut Collector>,
+) -> Result<Parsed, MeshError> {
+    let mut solids = 0;
     let mut weld = Welder::new(bytes.len() / 200 + 3);
     let mut faces = Vec::with_capacity(bytes.len() / 250);
     let mut poly: Vec<u32> = Vec::with_capacity(4);
@@ -180,7 +276,20 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
             )
         };
         state = match (state, kw.as_slice()) {
-            (State::Outside, b"solid") => State::Solid,
+            (State::Outside, b"solid") => {
+                if let Some(k) = keep.as_deref_mut() {
+                    if solids == 0 {
+                        let start = line.len() - line.trim_ascii_start().len() + 5;
+                        k.attributes.encoding = StlEncoding::Ascii {
+                            name: String::from_utf8_lossy(line[start..].trim_ascii()).into_owned(),
+                        };
+                    } else {
+                        k.attributes.solids_merged += 1;
+                    }
+                }
+                solids += 1;
+                State::Solid
+            }
             (State::Outside, _) => return Err(unexpected("solid")),
             (State::Solid, b"facet") => State::Facet,
             (State::Solid, b"endsolid") => State::Outside,
@@ -234,6 +343,9 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                     ));
                 }
                 super::fan(&poly, &mut faces);
+                if let Some(k) = keep.as_deref_mut() {
+                    push_polygon_size(&mut k.polygon_sizes, poly.len(), path, ln)?;
+                }
                 State::FacetDone
             }
             (State::Loop, _) => return Err(unexpected("vertex or endloop")),
@@ -284,6 +396,61 @@ pub(super) fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
         }
         rec.extend_from_slice(&[0, 0]);
         w.write_all(&rec)?;
+    }
+    Ok(())
+}
+
+/// Writes `mesh` in the encoding of `stl`: binary with its header and each
+/// facet's attribute bytes (a triangle of a triangulated polygon takes its
+/// polygon's), or ASCII with its solid's name; facet normals recomputed.
+pub(super) fn write_with_attributes(
+    w: &mut dyn Write,
+    mesh: &Mesh,
+    polygons: &Polygons,
+    stl: &StlAttributes,
+) -> std::io::Result<()> {
+    check_range(mesh)?;
+    let normal = |n: [f64; 3]| crate::vec3::normalize_or_zero(n);
+    match &stl.encoding {
+        StlEncoding::Binary { header } => {
+            let mut head = [b' '; 80];
+            head[..header.len().min(80)].copy_from_slice(&header[..header.len().min(80)]);
+            w.write_all(&head)?;
+            // binary facets are triangles: polygons and triangles are the same
+            w.write_all(&(mesh.num_faces() as u32).to_le_bytes())?;
+            let mut rec = Vec::with_capacity(RECORD);
+            for polygon in polygons.iter(&mesh.positions) {
+                for t in 1..polygon.vertices.len() - 1 {
+                    let corners =
+                        [0, t, t + 1].map(|k| mesh.positions[polygon.vertices[k] as usize]);
+                    rec.clear();
+                    let [a, b, c] = corners;
+                    for v in [triangle_normal(a, b, c), a, b, c] {
+                        for x in v {
+                            rec.extend_from_slice(&(x as f32).to_le_bytes());
+                        }
+                    }
+                    let attribute = stl.facet_attributes.get(polygon.source).copied();
+                    rec.extend_from_slice(&attribute.unwrap_or(0).to_le_bytes());
+                    w.write_all(&rec)?;
+                }
+            }
+        }
+        StlEncoding::Ascii { name } => {
+            writeln!(w, "solid {name}")?;
+            for polygon in polygons.iter(&mesh.positions) {
+                let n = normal(polygon.weighted_normal);
+                writeln!(w, "facet normal {} {} {}", n[0], n[1], n[2])?;
+                writeln!(w, "  outer loop")?;
+                for &v in &polygon.vertices {
+                    let p = mesh.positions[v as usize];
+                    writeln!(w, "    vertex {} {} {}", p[0], p[1], p[2])?;
+                }
+                writeln!(w, "  endloop")?;
+                writeln!(w, "endfacet")?;
+            }
+            writeln!(w, "endsolid {name}")?;
+        }
     }
     Ok(())
 }

@@ -1,26 +1,36 @@
-//! Stanford PLY: ASCII, binary little endian and binary big endian. Vertex
+//! PLY reader: ASCII, binary little endian and binary big endian. Vertex
 //! positions come from the `x`, `y`, `z` properties of element `vertex`
 //! (any scalar type), faces from the list property `vertex_indices` (or
 //! `vertex_index`) of element `face` (any integer count and index type),
-//! fan-triangulated. Every other element and property is read past.
+//! fan-triangulated. [`parse`] reads past every other element and
+//! property; [`parse_with_attributes`] keeps them ([`PlyAttributes`]).
 
-use super::{fan, perr, show};
+use super::{PlyAttributes, PlyColumn, PlyElement, PlyEncoding, PlyHeaderLine, PlyProperty};
 use crate::error::MeshError;
-use crate::mesh::Mesh;
-use std::io::Write;
+use crate::io::attributes::{ParsedWith, push_polygon_size};
+use crate::io::{fan, perr, show};
 use std::path::Path;
 
 type Parsed = (Vec<[f64; 3]>, Vec<[u32; 3]>);
 
+/// A PLY scalar type (every value of it is exactly an `f64`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Scalar {
+pub enum Scalar {
+    /// `char` / `int8`
     I8,
+    /// `uchar` / `uint8`
     U8,
+    /// `short` / `int16`
     I16,
+    /// `ushort` / `uint16`
     U16,
+    /// `int` / `int32`
     I32,
+    /// `uint` / `uint32`
     U32,
+    /// `float` / `float32`
     F32,
+    /// `double` / `float64`
     F64,
 }
 
@@ -39,14 +49,18 @@ impl Scalar {
         })
     }
 
-    fn is_int(self) -> bool {
+    /// Whether the type is an integer type.
+    pub fn is_int(self) -> bool {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
 }
 
-#[derive(Clone, Copy, Debug)]
-enum Kind {
+/// The type of a PLY property.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// one value
     Scalar(Scalar),
+    /// `list COUNT ITEM`: a count, then that many items
     List(Scalar, Scalar),
 }
 
@@ -54,6 +68,8 @@ enum Kind {
 struct Property {
     name: String,
     kind: Kind,
+    /// the header line as written
+    line: Vec<u8>,
 }
 
 #[derive(Debug)]
@@ -63,15 +79,12 @@ struct Element {
     props: Vec<Property>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Encoding {
-    Ascii,
-    Le,
-    Be,
-}
+type Encoding = PlyEncoding;
 
 struct Header {
     encoding: Encoding,
+    /// comments, `obj_info` and elements in header order
+    lines_in_order: Vec<PlyHeaderLine>,
     /// the line end: `\n` (also for `\r\n`), or `\r` (old Mac files)
     eol: u8,
     elements: Vec<Element>,
@@ -97,6 +110,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
     let mut ln = 0;
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut lines_in_order = Vec::new();
     loop {
         let Some(nl) = bytes[pos..].iter().position(|&b| b == eol) else {
             return Err(perr(path, ln + 1, "header ends without end_header"));
@@ -105,24 +119,25 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
         let line = line.strip_suffix(b"\r").unwrap_or(line);
         pos += nl + 1;
         ln += 1;
-        let mut tok = super::tokens(line);
+        let mut tok = crate::io::tokens(line);
         let kw = tok.next().unwrap_or_default();
         match kw {
             b"ply" if ln == 1 => {}
-            b"comment" | b"obj_info" | b"" => {}
+            b"comment" | b"obj_info" => lines_in_order.push(PlyHeaderLine::Verbatim(line.to_vec())),
+            b"" => {}
             b"format" => {
                 let f = tok.next().unwrap_or_default();
                 encoding = Some(match f {
                     b"ascii" => Encoding::Ascii,
-                    b"binary_little_endian" => Encoding::Le,
-                    b"binary_big_endian" => Encoding::Be,
+                    b"binary_little_endian" => Encoding::BinaryLittleEndian,
+                    b"binary_big_endian" => Encoding::BinaryBigEndian,
                     _ => return Err(perr(path, ln, format!("unknown PLY format {:?}", show(f)))),
                 });
             }
             b"element" => {
                 let name = tok.next().unwrap_or_default();
                 let c = tok.next().unwrap_or_default();
-                let count = super::parse_u64(c)
+                let count = crate::io::parse_u64(c)
                     .filter(|&c| c <= u32::MAX as u64)
                     .ok_or_else(|| {
                         perr(
@@ -131,6 +146,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
                             format!("element {:?}: bad count {:?}", show(name), show(c)),
                         )
                     })?;
+                lines_in_order.push(PlyHeaderLine::Element(elements.len()));
                 elements.push(Element {
                     name: String::from_utf8_lossy(name).into_owned(),
                     count: count as usize,
@@ -162,6 +178,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
                 el.props.push(Property {
                     name: String::from_utf8_lossy(name).into_owned(),
                     kind,
+                    line: line.trim_ascii().to_vec(),
                 });
             }
             b"end_header" => break,
@@ -177,6 +194,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
     let encoding = encoding.ok_or_else(|| perr(path, ln, "header has no format line"))?;
     Ok(Header {
         encoding,
+        lines_in_order,
         eol,
         elements,
         data_start: pos,
@@ -235,9 +253,97 @@ fn layout(h: &Header, path: &Path) -> Result<Layout, MeshError> {
     Ok(Layout { vertex, xyz, face })
 }
 
-pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
+/// Positions and fan triangles of a PLY file.
+pub(in crate::io) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
     let h = parse_header(bytes, path)?;
     let lay = layout(&h, path)?;
+    parse_into(bytes, path, &h, &lay, None)
+}
+
+/// Positions, fan triangles, polygon sizes and every other element and
+/// property of a PLY file.
+pub(in crate::io) fn parse_with_attributes(
+    bytes: &[u8],
+    path: &Path,
+) -> Result<ParsedWith<PlyAttributes>, MeshError> {
+    let h = parse_header(bytes, path)?;
+    let lay = layout(&h, path)?;
+    let elements = h
+        .elements
+        .iter()
+        .enumerate()
+        .map(|(ei, el)| PlyElement {
+            name: el.name.clone(),
+            count: el.count,
+            properties: el
+                .props
+                .iter()
+                .enumerate()
+                .map(|(pi, p)| PlyProperty {
+                    name: p.name.clone(),
+                    kind: p.kind,
+                    line: p.line.clone(),
+                    column: column_for(&h, &lay, ei, pi),
+                })
+                .collect(),
+        })
+        .collect();
+    let mut keep = Collector {
+        attributes: PlyAttributes {
+            encoding: h.encoding,
+            header: h.lines_in_order.clone(),
+            elements,
+            vertex_element: lay.vertex,
+            face_element: lay.face.map(|(e, _)| e),
+        },
+        polygon_sizes: Vec::new(),
+    };
+    let (positions, faces) = parse_into(bytes, path, &h, &lay, Some(&mut keep))?;
+    Ok((positions, faces, (keep.polygon_sizes, keep.attributes)))
+}
+
+/// What [`parse_with_attributes`] gathers on the way.
+struct Collector {
+    attributes: PlyAttributes,
+    polygon_sizes: Vec<u32>,
+}
+
+/// Where the values of property `pi` of element `ei` go.
+fn column_for(h: &Header, lay: &Layout, ei: usize, pi: usize) -> PlyColumn {
+    let prop = &h.elements[ei].props[pi];
+    let is_vertex = ei == lay.vertex;
+    let is_face = lay.face.is_some_and(|(fe, _)| fe == ei);
+    if is_vertex && let Some(k) = lay.xyz.iter().position(|&x| x == pi) {
+        return PlyColumn::Position(k);
+    }
+    if lay.face == Some((ei, pi)) {
+        return PlyColumn::FaceIndices;
+    }
+    if (is_vertex || is_face) && matches!(prop.kind, Kind::Scalar(_)) {
+        let normal = ["nx", "ny", "nz"].iter().position(|n| *n == prop.name);
+        if let Some(k) = normal {
+            return PlyColumn::Normal(k);
+        }
+    }
+    match prop.kind {
+        Kind::Scalar(_) => {
+            PlyColumn::Scalars(Vec::with_capacity(h.elements[ei].count.min(1 << 24)))
+        }
+        Kind::List(..) => PlyColumn::Lists {
+            lengths: Vec::new(),
+            items: Vec::new(),
+        },
+    }
+}
+
+/// The one PLY data parser; `keep` gathers the attributes when given.
+fn parse_into(
+    bytes: &[u8],
+    path: &Path,
+    h: &Header,
+    lay: &Layout,
+    mut keep: Option<&mut Collector>,
+) -> Result<Parsed, MeshError> {
     let nv = h.elements[lay.vertex].count;
     let mut positions = Vec::with_capacity(nv.min(bytes.len() / 3));
     let mut faces = Vec::new();
@@ -251,7 +357,7 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
         e => Box::new(Binary {
             data: bytes,
             pos: h.data_start,
-            be: e == Encoding::Be,
+            be: e == Encoding::BinaryBigEndian,
         }),
     };
     let mut poly: Vec<u32> = Vec::with_capacity(8);
@@ -268,6 +374,12 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                         let v = src
                             .scalar(t)
                             .map_err(|m| ctx(&*src, i, &format!("property {}: {m}", prop.name)))?;
+                        if let Some(k) = keep.as_deref_mut()
+                            && let PlyColumn::Scalars(values) =
+                                &mut k.attributes.elements[ei].properties[pi].column
+                        {
+                            values.push(v);
+                        }
                         if ei == lay.vertex
                             && let Some(k) = lay.xyz.iter().position(|&x| x == pi)
                         {
@@ -294,6 +406,16 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                         }
                         let n = n as usize;
                         let is_face = lay.face == Some((ei, pi));
+                        let mut list = match keep.as_deref_mut() {
+                            Some(k) => match &mut k.attributes.elements[ei].properties[pi].column {
+                                PlyColumn::Lists { lengths, items } => {
+                                    lengths.push(n as u32);
+                                    Some(items)
+                                }
+                                _ => None,
+                            },
+                            None => None,
+                        };
                         if is_face {
                             poly.clear();
                         }
@@ -301,6 +423,9 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                             let v = src.scalar(it).map_err(|m| {
                                 ctx(&*src, i, &format!("list {} item {k}: {m}", prop.name))
                             })?;
+                            if let Some(items) = list.as_deref_mut() {
+                                items.push(v);
+                            }
                             if is_face {
                                 if !(v >= 0.0 && v < nv as f64) {
                                     return Err(ctx(
@@ -323,6 +448,10 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, MeshError> {
                                 ));
                             }
                             fan(&poly, &mut faces);
+                            if let Some(k) = keep.as_deref_mut() {
+                                let (line, _) = src.place();
+                                push_polygon_size(&mut k.polygon_sizes, n, path, line)?;
+                            }
                         }
                     }
                 }
@@ -463,7 +592,7 @@ impl Source for Ascii<'_> {
         let tok = self
             .token_on_line()
             .ok_or_else(|| "line ends early (too few values)".to_string())?;
-        let v = super::parse_f64(tok).ok_or_else(|| format!("bad number {:?}", show(tok)))?;
+        let v = crate::io::parse_f64(tok).ok_or_else(|| format!("bad number {:?}", show(tok)))?;
         if t.is_int() && v.fract() != 0.0 {
             return Err(format!("{:?} is not an integer", show(tok)));
         }
@@ -493,55 +622,4 @@ impl Source for Ascii<'_> {
             None
         }
     }
-}
-
-pub(super) fn write(w: &mut dyn Write, mesh: &Mesh, ascii: bool) -> std::io::Result<()> {
-    let index_type = if mesh.num_vertices() > i32::MAX as usize {
-        "uint"
-    } else {
-        "int"
-    };
-    write!(
-        w,
-        "ply\nformat {} 1.0\ncomment written by normalnet\nelement vertex {}\n\
-         property double x\nproperty double y\nproperty double z\nelement face {}\n\
-         property list uchar {index_type} vertex_indices\nend_header\n",
-        if ascii {
-            "ascii"
-        } else {
-            "binary_little_endian"
-        },
-        mesh.num_vertices(),
-        mesh.num_faces()
-    )?;
-    if ascii {
-        for p in &mesh.positions {
-            writeln!(w, "{} {} {}", p[0], p[1], p[2])?;
-        }
-        for f in &mesh.faces {
-            writeln!(w, "3 {} {} {}", f[0], f[1], f[2])?;
-        }
-    } else {
-        let mut buf = Vec::with_capacity(24 * 4096);
-        for chunk in mesh.positions.chunks(4096) {
-            buf.clear();
-            for p in chunk {
-                for c in p {
-                    buf.extend_from_slice(&c.to_le_bytes());
-                }
-            }
-            w.write_all(&buf)?;
-        }
-        for chunk in mesh.faces.chunks(4096) {
-            buf.clear();
-            for f in chunk {
-                buf.push(3);
-                for i in f {
-                    buf.extend_from_slice(&i.to_le_bytes());
-                }
-            }
-            w.write_all(&buf)?;
-        }
-    }
-    Ok(())
 }
