@@ -357,6 +357,14 @@ fn inputs_from_data(data: &Path, names: &[String]) -> anyhow::Result<Vec<BenchIn
     Ok(inputs)
 }
 
+/// What a suite gives the bench: its inputs, the report's groups and the
+/// noise description of each pair.
+struct SuiteInputs {
+    inputs: Vec<BenchInput>,
+    groups: Vec<ReportGroup>,
+    noise_labels: Vec<(String, String)>,
+}
+
 /// The pairs of a suite (`--models`: only those), generated into `cache`
 /// where missing, with the report's groups and noise labels.
 fn inputs_from_suite(
@@ -364,7 +372,7 @@ fn inputs_from_suite(
     cache: &Path,
     names: &[String],
     quiet: bool,
-) -> anyhow::Result<(Vec<BenchInput>, Vec<ReportGroup>, Vec<(String, String)>)> {
+) -> anyhow::Result<SuiteInputs> {
     let mut suite = Suite::load(path)?;
     let names: Vec<&str> = names.iter().map(|n| n.trim()).collect();
     if let Some(bad) = names
@@ -408,7 +416,11 @@ fn inputs_from_suite(
             clean: p.clean,
         })
         .collect();
-    Ok((inputs, groups, labels))
+    Ok(SuiteInputs {
+        inputs,
+        groups,
+        noise_labels: labels,
+    })
 }
 
 /// Gives the records of a suite's pairs their noise description (the
@@ -675,13 +687,17 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             );
         }
     }
-    let (inputs, groups, noise_labels) = match &args.suite {
+    let SuiteInputs {
+        inputs,
+        groups,
+        noise_labels,
+    } = match &args.suite {
         Some(suite) => inputs_from_suite(suite, &args.cache, &args.models, quiet)?,
-        None => (
-            inputs_from_data(&args.data, &args.models)?,
-            Vec::new(),
-            Vec::new(),
-        ),
+        None => SuiteInputs {
+            inputs: inputs_from_data(&args.data, &args.models)?,
+            groups: Vec::new(),
+            noise_labels: Vec::new(),
+        },
     };
     let models: Vec<String> = inputs.iter().map(|i| i.model.clone()).collect();
     std::fs::create_dir_all(&args.out)
