@@ -166,6 +166,7 @@ fn noise<'py>(
         impulsive_fraction: impulsive,
         direction,
         seed,
+        ..NoiseParams::default()
     };
     let out = py
         .detach(|| normalnet_mesh::add_noise(&mesh, &params))

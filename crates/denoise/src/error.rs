@@ -40,6 +40,15 @@ pub enum DenoiseError {
         /// the largest absolute coordinate
         largest: f64,
     },
+    /// A validation suite is invalid or could not be generated
+    /// ([`crate::suite`]).
+    #[error("{}: {message}", path.display())]
+    Suite {
+        /// the suite file (or the cache folder, when generating)
+        path: std::path::PathBuf,
+        /// what is wrong, naming the pair
+        message: String,
+    },
     /// A classical filter failed.
     #[error(transparent)]
     Filter(#[from] normalnet_filters::FilterError),

@@ -29,6 +29,7 @@ pub mod oracle;
 pub mod params;
 pub mod registry;
 mod scale;
+pub mod suite;
 
 pub use error::DenoiseError;
 /// The kernel path (`NORMALNET_ISA`), re-exported for the CLI and bindings.

@@ -285,7 +285,11 @@ fn a_mesh_of_other_counts_is_refused() {
     let mut broken = file.attributes.clone();
     broken.polygon_sizes[0] = 2;
     let e = encode_mesh_file(&file.mesh, &broken, &FileWriteOptions::default()).unwrap_err();
-    assert!(e.to_string().contains("polygon 0 of the attributes has 2 corners"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("polygon 0 of the attributes has 2 corners"),
+        "{e}"
+    );
 }
 
 /// A PLY file with vertex colours, normals, a custom quality, a vertex

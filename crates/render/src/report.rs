@@ -68,6 +68,39 @@ pub struct BenchReport {
     /// method columns shown for reference but never ranked (bold), e.g. an
     /// oracle that uses the ground truth; `noisy` is always unranked
     pub unranked: Vec<String>,
+    /// groups of models (a validation suite's), in display order: their
+    /// means follow the table
+    pub groups: Vec<ReportGroup>,
+    /// `(model, noise)` for models whose name does not hold their noise
+    /// (a suite's pairs); other models' noise comes from [`split_model_name`]
+    pub noise_labels: Vec<(String, String)>,
+}
+
+/// A named group of models (e.g. `heavy`, `cad`).
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(default)]
+pub struct ReportGroup {
+    /// the group's name
+    pub name: String,
+    /// its models, in table order
+    pub models: Vec<String>,
+}
+
+/// The mean of one column over one group's models (`results.json`
+/// `group_means`); a value is `None` where the column lacks it on some
+/// model of the group.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct GroupMean {
+    /// the group's name
+    pub group: String,
+    /// the column (`noisy` or a method)
+    pub method: String,
+    /// number of models in the group
+    pub pairs: usize,
+    /// mean E_a, degrees
+    pub e_a_deg: Option<f64>,
+    /// mean E_v / l_e
+    pub e_v_over_le: Option<f64>,
 }
 
 /// Splits a data-set folder name into model and noise level:
@@ -205,11 +238,15 @@ impl BenchReport {
     /// Mean over models of one metric per method; `None` where a method lacks a
     /// value on some model (a mean over fewer models would not compare).
     fn means(&self, metric: &MetricRow) -> Vec<Option<f64>> {
+        self.means_over(&self.models, metric)
+    }
+
+    /// [`BenchReport::means`] over `models` only.
+    fn means_over(&self, models: &[String], metric: &MetricRow) -> Vec<Option<f64>> {
         self.columns()
             .iter()
             .map(|m| {
-                let vals: Option<Vec<f64>> = self
-                    .models
+                let vals: Option<Vec<f64>> = models
                     .iter()
                     .map(|model| {
                         self.record(model, m)
@@ -222,6 +259,34 @@ impl BenchReport {
                     .map(|v| v.iter().sum::<f64>() / v.len() as f64)
             })
             .collect()
+    }
+
+    /// The model and noise columns of `model`'s rows.
+    fn name_and_noise(&self, model: &str) -> (String, String) {
+        match self.noise_labels.iter().find(|(m, _)| m == model) {
+            Some((m, noise)) => (m.clone(), noise.clone()),
+            None => split_model_name(model),
+        }
+    }
+
+    /// Every column's E_a and E_v / l_e means over each group.
+    pub fn group_means(&self) -> Vec<GroupMean> {
+        let cols = self.columns();
+        let mut out = Vec::new();
+        for g in &self.groups {
+            let e_a = self.means_over(&g.models, &METRIC_ROWS[0]);
+            let e_v = self.means_over(&g.models, &METRIC_ROWS[1]);
+            for (i, c) in cols.iter().enumerate() {
+                out.push(GroupMean {
+                    group: g.name.clone(),
+                    method: c.clone(),
+                    pairs: g.models.len(),
+                    e_a_deg: e_a[i],
+                    e_v_over_le: e_v[i],
+                });
+            }
+        }
+        out
     }
 
     fn failures(&self) -> Vec<&RunRecord> {
@@ -272,7 +337,7 @@ pub fn table_markdown(report: &BenchReport) -> String {
     let _ = writeln!(s, "| model | noise | metric | {} |", cols.join(" | "));
     let _ = writeln!(s, "|---|---|---|{}", "---:|".repeat(cols.len()));
     for model in &report.models {
-        let (name, noise) = split_model_name(model);
+        let (name, noise) = report.name_and_noise(model);
         for (k, metric) in METRIC_ROWS.iter().enumerate() {
             let (m, n) = if k == 0 {
                 (name.as_str(), noise.as_str())
@@ -330,6 +395,9 @@ pub fn table_markdown(report: &BenchReport) -> String {
         }
     }
     let _ = writeln!(s);
+    if !report.groups.is_empty() {
+        group_means_markdown(report, &mut s);
+    }
     let failures = report.failures();
     if !failures.is_empty() {
         let _ = writeln!(s, "## Failed runs\n");
@@ -401,6 +469,49 @@ pub fn table_markdown(report: &BenchReport) -> String {
     s
 }
 
+/// The `## Group means` table of `table.md`: per group, each column's mean
+/// E_a and E_v / l_e over the group's models, the best ranked in bold.
+fn group_means_markdown(report: &BenchReport, s: &mut String) {
+    let cols = report.columns();
+    let _ = writeln!(s, "## Group means\n");
+    let _ = writeln!(s, "| group | pairs | metric | {} |", cols.join(" | "));
+    let _ = writeln!(s, "|---|---:|---|{}", "---:|".repeat(cols.len()));
+    for g in &report.groups {
+        for (k, metric) in METRIC_ROWS[..2].iter().enumerate() {
+            let means = report.means_over(&g.models, metric);
+            let ranked: Vec<Option<f64>> = cols
+                .iter()
+                .zip(&means)
+                .map(|(c, v)| if report.ranked(c) { *v } else { None })
+                .collect();
+            let best = best_cells(&ranked, metric.decimals);
+            let cells: Vec<String> = means
+                .iter()
+                .zip(&best)
+                .map(|(v, &b)| match v {
+                    Some(v) => {
+                        let t = format!("{v:.p$}", p = metric.decimals);
+                        if b { format!("**{t}**") } else { t }
+                    }
+                    None => "–".to_string(),
+                })
+                .collect();
+            let (name, n) = if k == 0 {
+                (md_escape(&g.name), g.models.len().to_string())
+            } else {
+                (String::new(), String::new())
+            };
+            let _ = writeln!(
+                s,
+                "| {name} | {n} | {} | {} |",
+                metric.label,
+                cells.join(" | ")
+            );
+        }
+    }
+    let _ = writeln!(s);
+}
+
 fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
@@ -441,9 +552,21 @@ pub fn results_csv(report: &BenchReport) -> String {
     s
 }
 
-/// `results.json`: the whole report (records, models, methods, pictures, notes).
+/// `results.json`: the whole report (records, models, methods, pictures,
+/// notes) and, when it has groups, `group_means` ([`BenchReport::group_means`]).
 pub fn results_json(report: &BenchReport) -> Result<String, RenderError> {
-    serde_json::to_string_pretty(report).map_err(|e| RenderError::Report {
+    #[derive(Serialize)]
+    struct WithGroupMeans<'a> {
+        #[serde(flatten)]
+        report: &'a BenchReport,
+        #[serde(skip_serializing_if = "Vec::is_empty")]
+        group_means: Vec<GroupMean>,
+    }
+    let json = WithGroupMeans {
+        report,
+        group_means: report.group_means(),
+    };
+    serde_json::to_string_pretty(&json).map_err(|e| RenderError::Report {
         path: "results.json".into(),
         message: e.to_string(),
     })
@@ -475,7 +598,7 @@ pub fn index_html(report: &BenchReport) -> String {
     }
     let _ = writeln!(s, "</tr>");
     for model in &report.models {
-        let (name, noise) = split_model_name(model);
+        let (name, noise) = report.name_and_noise(model);
         for (k, metric) in METRIC_ROWS.iter().enumerate() {
             let _ = write!(s, "<tr{}>", if k == 0 { " class=\"first\"" } else { "" });
             if k == 0 {
@@ -624,7 +747,55 @@ mod tests {
             pictures: vec![("Fandisk0.3".into(), "Fandisk0.3.png".into())],
             notes: vec!["a note".into()],
             unranked: vec![],
+            ..Default::default()
         }
+    }
+
+    #[test]
+    fn group_means_follow_the_table_and_go_into_the_json() {
+        let mut r = report();
+        r.groups = vec![
+            ReportGroup {
+                name: "cad".into(),
+                models: vec!["Fandisk0.3".into(), "Block0.4".into()],
+            },
+            ReportGroup {
+                name: "sharp".into(),
+                models: vec!["Fandisk0.3".into()],
+            },
+        ];
+        r.noise_labels = vec![("Block0.4".into(), "gaussian L=0.4".into())];
+        let md = table_markdown(&r);
+        let table = md.split("## Group means").nth(1).expect("a group table");
+        // cad: gnf (2.93 + 4.11) / 2 = 3.52, bnf 3.80, normalnet failed on Block
+        assert!(
+            table.contains("| cad | 2 | E_a (deg) | 30.50 | **3.52** | 3.80 | – |"),
+            "{table}"
+        );
+        assert!(
+            table.contains("| sharp | 1 | E_a (deg) | 28.00 | 2.93 | 3.49 | **2.50** |"),
+            "{table}"
+        );
+        assert!(
+            md.contains("| Block0.4 | gaussian L=0.4 | E_a (deg) |"),
+            "{md}"
+        );
+        let json: serde_json::Value = serde_json::from_str(&results_json(&r).unwrap()).unwrap();
+        let means = json["group_means"].as_array().unwrap();
+        let gnf_cad = means
+            .iter()
+            .find(|m| m["group"] == "cad" && m["method"] == "gnf")
+            .unwrap();
+        assert!((gnf_cad["e_a_deg"].as_f64().unwrap() - 3.52).abs() < 1e-12);
+        assert_eq!(gnf_cad["pairs"], 2);
+        // a report without groups writes no group table or means
+        assert!(!table_markdown(&report()).contains("Group means"));
+        assert!(
+            results_json(&report())
+                .unwrap()
+                .find("group_means")
+                .is_none()
+        );
     }
 
     #[test]

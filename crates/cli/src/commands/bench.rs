@@ -18,16 +18,24 @@
 //! ground truth: the ceiling of a perfect NormalNet, shown but never ranked)
 //! with the model's NormalNet N_f / N_v / μ_g unless `[..oracle]` says otherwise. A failing method is reported as a
 //! failed cell and the bench goes on.
+//!
+//! `--suite FILE` (e.g. `configs/validation.toml`, `normalnet_denoise::suite`)
+//! replaces `--data`: the suite's pairs are generated into `--cache` where
+//! missing or out of date, benched like model folders (the pair's name is
+//! the model), and `table.md` / `results.json` add each group's means.
 
 use crate::commands::render::{parse_size, parse_view};
 use crate::input;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_denoise::params::describe;
+use normalnet_denoise::suite::{Suite, describe_noise};
 use normalnet_denoise::{Denoiser, Kind, METHODS, Params};
 use normalnet_mesh::metrics::{Metrics, compare, per_face_angle_errors};
 use normalnet_mesh::{Mesh, read_mesh};
-use normalnet_render::report::{BenchReport, NOISY, RunRecord, split_model_name, write_report};
+use normalnet_render::report::{
+    BenchReport, NOISY, ReportGroup, RunRecord, split_model_name, write_report,
+};
 use normalnet_render::{
     ColourBar, Image, RenderOptions, append_colour_bar, compose_grid, draw_lines, error_colors,
     nice_error_scale, render,
@@ -54,6 +62,14 @@ pub struct Args {
     /// Folder with one sub-folder per model holding Noisy.obj and Original.obj.
     #[arg(long, default_value = "../shared/data/gd")]
     pub data: PathBuf,
+    /// A validation suite (TOML, e.g. configs/validation.toml) instead of --data: clean sources with
+    /// seeded noise specs and groups; missing noisy meshes are generated into --cache, and the table
+    /// adds per-group means.
+    #[arg(long, conflicts_with = "data")]
+    pub suite: Option<PathBuf>,
+    /// Cache folder of the suite's generated meshes (CACHE/PAIR/Noisy.obj, key.json).
+    #[arg(long, default_value = "target/validation-cache")]
+    pub cache: PathBuf,
     /// Methods, comma-separated: normalnet and the classical ones (see `normalnet denoise --help`).
     /// Default: normalnet and every classical method.
     #[arg(long, value_delimiter = ',')]
@@ -301,6 +317,120 @@ fn discover_models(data: &Path) -> anyhow::Result<Vec<String>> {
         .collect();
     models.sort();
     Ok(models)
+}
+
+/// One model of the bench: its name and the files of its noisy input and
+/// ground truth.
+struct BenchInput {
+    model: String,
+    noisy: PathBuf,
+    clean: PathBuf,
+}
+
+/// The models of a data folder (`--models`, else every pair folder), checked.
+fn inputs_from_data(data: &Path, names: &[String]) -> anyhow::Result<Vec<BenchInput>> {
+    let models = if names.is_empty() {
+        discover_models(data)?
+    } else {
+        names.iter().map(|m| m.trim().to_string()).collect()
+    };
+    if models.is_empty() {
+        bail!(
+            "no model folders with Noisy.obj and Original.obj under {}",
+            data.display()
+        );
+    }
+    let mut inputs = Vec::new();
+    for m in models {
+        let dir = data.join(&m);
+        for f in ["Noisy.obj", "Original.obj"] {
+            if !dir.join(f).is_file() {
+                bail!("{}: missing {f}", dir.display());
+            }
+        }
+        inputs.push(BenchInput {
+            noisy: dir.join("Noisy.obj"),
+            clean: dir.join("Original.obj"),
+            model: m,
+        });
+    }
+    Ok(inputs)
+}
+
+/// What a suite gives the bench: its inputs, the report's groups and the
+/// noise description of each pair.
+struct SuiteInputs {
+    inputs: Vec<BenchInput>,
+    groups: Vec<ReportGroup>,
+    noise_labels: Vec<(String, String)>,
+}
+
+/// The pairs of a suite (`--models`: only those), generated into `cache`
+/// where missing, with the report's groups and noise labels.
+fn inputs_from_suite(
+    path: &Path,
+    cache: &Path,
+    names: &[String],
+    quiet: bool,
+) -> anyhow::Result<SuiteInputs> {
+    let mut suite = Suite::load(path)?;
+    let names: Vec<&str> = names.iter().map(|n| n.trim()).collect();
+    if let Some(bad) = names
+        .iter()
+        .find(|n| !suite.pairs.iter().any(|p| &p.name == *n))
+    {
+        bail!("{}: no pair named `{bad}`", path.display());
+    }
+    if !names.is_empty() {
+        suite.pairs.retain(|p| names.contains(&p.name.as_str()));
+    }
+    let prepared = suite.prepare(cache, &Bar::new(quiet))?;
+    if !quiet {
+        let made = prepared.iter().filter(|p| p.generated).count();
+        stderr_line!(
+            "suite {}: {} pairs, {made} generated into {}",
+            path.display(),
+            prepared.len(),
+            cache.display()
+        );
+    }
+    let groups = suite
+        .groups
+        .iter()
+        .map(|g| ReportGroup {
+            name: g.clone(),
+            models: suite.members(g).iter().map(|m| m.to_string()).collect(),
+        })
+        .filter(|g| !g.models.is_empty())
+        .collect();
+    let labels = suite
+        .pairs
+        .iter()
+        .map(|p| (p.name.clone(), describe_noise(&p.noise)))
+        .collect();
+    let inputs = prepared
+        .into_iter()
+        .map(|p| BenchInput {
+            model: p.name,
+            noisy: p.noisy,
+            clean: p.clean,
+        })
+        .collect();
+    Ok(SuiteInputs {
+        inputs,
+        groups,
+        noise_labels: labels,
+    })
+}
+
+/// Gives the records of a suite's pairs their noise description (the
+/// folder-name split of [`split_model_name`] does not apply to them).
+fn label_noise(report: &mut BenchReport) {
+    for r in &mut report.records {
+        if let Some((_, label)) = report.noise_labels.iter().find(|(m, _)| m == &r.model) {
+            r.noise = label.clone();
+        }
+    }
 }
 
 /// Runs a closure, turning a panic into an error so one method cannot stop the bench.
@@ -557,25 +687,19 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             );
         }
     }
-    let models = if args.models.is_empty() {
-        discover_models(&args.data)?
-    } else {
-        args.models.iter().map(|m| m.trim().to_string()).collect()
+    let SuiteInputs {
+        inputs,
+        groups,
+        noise_labels,
+    } = match &args.suite {
+        Some(suite) => inputs_from_suite(suite, &args.cache, &args.models, quiet)?,
+        None => SuiteInputs {
+            inputs: inputs_from_data(&args.data, &args.models)?,
+            groups: Vec::new(),
+            noise_labels: Vec::new(),
+        },
     };
-    if models.is_empty() {
-        bail!(
-            "no model folders with Noisy.obj and Original.obj under {}",
-            args.data.display()
-        );
-    }
-    for m in &models {
-        let dir = args.data.join(m);
-        for f in ["Noisy.obj", "Original.obj"] {
-            if !dir.join(f).is_file() {
-                bail!("{}: missing {f}", dir.display());
-            }
-        }
-    }
+    let models: Vec<String> = inputs.iter().map(|i| i.model.clone()).collect();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
 
@@ -611,7 +735,19 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             report.unranked.join(", ")
         ));
     }
-    report.notes.push(format!("data: {}", args.data.display()));
+    report.groups = groups;
+    for (model, label) in noise_labels {
+        report.noise_labels.retain(|(m, _)| m != &model);
+        report.noise_labels.push((model, label));
+    }
+    match &args.suite {
+        Some(suite) => report.notes.push(format!(
+            "suite: {} (generated into {})",
+            suite.display(),
+            args.cache.display()
+        )),
+        None => report.notes.push(format!("data: {}", args.data.display())),
+    }
     report.notes.push(format!("settings: {}", settings.source));
     report
         .notes
@@ -635,18 +771,18 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
 
     let total_runs = models.len() * methods.len();
     let mut run_index = 0;
-    for model in &models {
+    for input in &inputs {
+        let model = &input.model;
         // runs redone here replace the earlier ones (model by model, so a
         // stopped bench keeps the earlier runs of the models it did not reach)
         report
             .records
             .retain(|r| !(&r.model == model && (r.method == NOISY || methods.contains(&r.method))));
-        let dir = args.data.join(model);
         let load_start = Instant::now();
         let loaded = (|| -> anyhow::Result<(Mesh, Mesh)> {
             Ok((
-                input::read_mesh(dir.join("Noisy.obj"))?,
-                input::read_mesh(dir.join("Original.obj"))?,
+                input::read_mesh(&input.noisy)?,
+                input::read_mesh(&input.clean)?,
             ))
         })();
         let (noisy, gt) = match loaded {
@@ -685,8 +821,11 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
                 }
             }
             Err(e) => {
-                let e = anyhow::Error::from(e)
-                    .context(format!("{model}: Noisy.obj and Original.obj do not match"));
+                let e = anyhow::Error::from(e).context(format!(
+                    "{model}: {} and {} do not match",
+                    input.noisy.display(),
+                    input.clean.display()
+                ));
                 report
                     .records
                     .push(failed(model, NOISY, String::new(), &e, 0.0));
@@ -782,6 +921,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             }
         }
         // keep the files current so a long bench can be watched (and survives a stop)
+        label_noise(&mut report);
         write_report(&args.out, &report)
             .with_context(|| format!("writing the report into {}", args.out.display()))?;
     }
@@ -789,6 +929,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         "whole bench: {:.1} s",
         started.elapsed().as_secs_f64()
     ));
+    label_noise(&mut report);
     write_report(&args.out, &report)
         .with_context(|| format!("writing the report into {}", args.out.display()))?;
     if !quiet {
