@@ -601,3 +601,59 @@ fn off_comments_dropped_are_a_warning() {
         file.warnings
     );
 }
+
+/// Written in another format, a file warns with what it actually held,
+/// and a file that held nothing beyond positions and triangles does not warn.
+#[test]
+fn a_format_change_names_what_the_input_held_and_only_that() {
+    let dir = temp_dir();
+    let full = parse(OBJ_FULL.as_bytes(), Format::Obj);
+    let warnings = write_mesh_file(
+        dir.path().join("full.ply"),
+        &full.mesh,
+        &full.attributes,
+        &FileWriteOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    for held in [
+        "polygons",
+        "texture coordinates",
+        "normals",
+        "materials",
+        "groups and objects",
+        "smoothing groups",
+        "vertex colours",
+    ] {
+        assert!(warnings[0].contains(held), "{held}: {}", warnings[0]);
+    }
+    let plain = parse(
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\n# a comment\nf 1 2 3\n",
+        Format::Obj,
+    );
+    let warnings = write_mesh_file(
+        dir.path().join("plain.ply"),
+        &plain.mesh,
+        &plain.attributes,
+        &FileWriteOptions::default(),
+    )
+    .unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let quad = parse(
+        b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+        Format::Obj,
+    );
+    let warnings = write_mesh_file(
+        dir.path().join("quad.stl"),
+        &quad.mesh,
+        &quad.attributes,
+        &FileWriteOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(warnings.len(), 1);
+    assert!(
+        warnings[0].ends_with("the input's polygons dropped"),
+        "{}",
+        warnings[0]
+    );
+}

@@ -294,13 +294,17 @@ pub fn write_mesh_file_as(
                 ply_ascii: options.ply_ascii,
             },
         )?;
+        let held = attributes.describe();
+        if held.is_empty() {
+            return Ok(Vec::new());
+        }
         return Ok(vec![format!(
             "{}: written as {} from {} input: only positions and triangles are kept, \
              the input's {} dropped",
             path.display(),
             format.name(),
             attributes.format().name(),
-            attributes.describe()
+            held.join(", ")
         )]);
     }
     let out_dir = absolute_dir(&super::write_target(path));
@@ -360,23 +364,71 @@ fn write_attributes(
 }
 
 impl Attributes {
-    /// A short list of what the attributes hold, for the warning of a
-    /// format change.
-    fn describe(&self) -> String {
-        let polygons = if self.polygon_sizes.iter().any(|&n| n != 3) {
-            "polygons, "
-        } else {
-            ""
-        };
-        let rest = match &self.content {
-            FormatAttributes::Obj(_) => {
-                "texture coordinates, normals, materials, groups and vertex colours"
+    /// What the attributes hold beyond positions and triangles, for the
+    /// warning of a format change; empty when the file held nothing else.
+    fn describe(&self) -> Vec<String> {
+        let mut held = Vec::new();
+        if self.polygon_sizes.iter().any(|&n| n != 3) {
+            held.push("polygons".to_string());
+        }
+        let mut add = |present: bool, what: &str| {
+            if present {
+                held.push(what.to_string());
             }
-            FormatAttributes::Off(_) => "colours",
-            FormatAttributes::Ply(_) => "extra vertex and face properties",
-            FormatAttributes::Stl(_) => "header and facet attribute bytes",
         };
-        format!("{polygons}{rest} are")
+        match &self.content {
+            FormatAttributes::Obj(obj) => {
+                let verbatim = |keyword: &str| {
+                    obj.statements.iter().any(|st| match st {
+                        ObjStatement::Verbatim(line) => line
+                            .split(|b| b.is_ascii_whitespace())
+                            .next()
+                            .is_some_and(|k| k.eq_ignore_ascii_case(keyword.as_bytes())),
+                        _ => false,
+                    })
+                };
+                add(!obj.texture_coords.is_empty(), "texture coordinates");
+                add(!obj.normals.is_empty(), "normals");
+                let libraries = obj
+                    .statements
+                    .iter()
+                    .any(|st| matches!(st, ObjStatement::MaterialLibrary(_)));
+                add(libraries || verbatim("usemtl"), "materials");
+                add(verbatim("g") || verbatim("o"), "groups and objects");
+                add(verbatim("s"), "smoothing groups");
+                add(!obj.vertex_tails.is_empty(), "vertex colours");
+            }
+            FormatAttributes::Off(off) => {
+                add(
+                    !off.vertex_tails.is_empty() || !off.face_tails.is_empty(),
+                    "vertex and face colours",
+                );
+            }
+            FormatAttributes::Ply(ply) => {
+                let extra: Vec<String> = ply
+                    .elements
+                    .iter()
+                    .flat_map(|e| {
+                        e.properties
+                            .iter()
+                            .filter(|p| {
+                                matches!(p.column, PlyColumn::Scalars(_) | PlyColumn::Lists { .. })
+                            })
+                            .map(move |p| format!("{} {}", e.name, p.name))
+                    })
+                    .collect();
+                if !extra.is_empty() {
+                    held.push(format!("properties {}", extra.join(", ")));
+                }
+            }
+            FormatAttributes::Stl(stl) => {
+                add(
+                    stl.facet_attributes.iter().any(|&a| a != 0),
+                    "facet attribute bytes",
+                );
+            }
+        }
+        held
     }
 }
 
