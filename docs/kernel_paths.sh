@@ -18,15 +18,17 @@ cargo build --release -q -p normalnet-cli
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 grep -m1 'model name' /proc/cpuinfo
-echo "| path | Fandisk0.3 defaults, -j $THREADS (s) | E_a (°) | $SCALAR_IT iterations, -j 1, CPU s | E_a (°) |"
-echo "|---|---:|---:|---:|---:|"
+echo "| path | Fandisk0.3 defaults, -j $THREADS, wall s | -j 1, CPU s | E_a (°) | $SCALAR_IT iterations, -j 1, CPU s | E_a (°) |"
+echo "|---|---:|---:|---:|---:|---:|"
 for isa in avx512vnni avx512 avx2 scalar; do
   if ! NORMALNET_ISA=$isa $B models > /dev/null 2>&1; then
-    echo "| $isa | (not on this CPU) | | | |"
+    echo "| $isa | (not on this CPU) | | | | |"
     continue
   fi
-  full="–"; full_ea="–"
+  full="–"; full_ea="–"; full_cpu="–"
   if [ "$isa" != scalar ]; then
+    full_cpu=$( { NORMALNET_ISA=$isa perf stat -x, -e task-clock $B -q -j 1 denoise $F/Noisy.obj "$OUT/$isa-1.obj" \
+        > /dev/null; } 2>&1 | awk -F, '/task-clock/ {printf "%.2f", $1 / 1000}')
     NORMALNET_ISA=$isa $B -q -j "$THREADS" denoise $F/Noisy.obj "$OUT/$isa.obj" --gt $F/Original.obj --json > "$OUT/$isa.json"
     full=$(python3 -c "import json; v=json.load(open('$OUT/$isa.json')); print(f\"{v['denoise_seconds']:.2f}\")")
     full_ea=$(python3 -c "import json; v=json.load(open('$OUT/$isa.json')); print(f\"{v['metrics']['e_a_deg']:.4f}\")")
@@ -34,11 +36,11 @@ for isa in avx512vnni avx512 avx2 scalar; do
   cpu=$( { NORMALNET_ISA=$isa perf stat -x, -e task-clock $B -q -j 1 denoise $F/Noisy.obj "$OUT/$isa-short.obj" \
       --iterations "$SCALAR_IT" --gt $F/Original.obj --json > "$OUT/$isa-short.json"; } 2>&1 | awk -F, '/task-clock/ {printf "%.2f", $1 / 1000}')
   short_ea=$(python3 -c "import json; v=json.load(open('$OUT/$isa-short.json')); print(f\"{v['metrics']['e_a_deg']:.4f}\")")
-  echo "| $isa | $full | $full_ea | $cpu | $short_ea |"
+  echo "| $isa | $full | $full_cpu | $full_ea | $cpu | $short_ea |"
 done
 echo
 for isa in avx512vnni avx512 avx2 scalar; do
   NORMALNET_ISA=$isa $B models > /dev/null 2>&1 || continue
   echo "training ($isa):"
-  NORMALNET_ISA=$isa cargo bench -q -p normalnet-cnn --bench train -- 1 2>/dev/null | head -1
+  NORMALNET_ISA=$isa cargo bench -q -p normalnet-cnn --bench train -- 1 2>/dev/null | grep samples/s
 done
