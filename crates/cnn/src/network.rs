@@ -357,18 +357,24 @@ impl Cnn {
             int8_shortcut: false,
         };
         cnn.set_row_stem(true);
-        let mut s = cnn.scratch();
-        let mut out = vec![0.0; cnn.outputs()];
+        cnn.record_background();
+        Ok(cnn)
+    }
+
+    /// Records the activations of an all-empty grid on this network's path
+    /// (the values every cube far from the surface takes).
+    fn record_background(&mut self) {
+        let mut s = self.scratch();
+        let mut out = vec![0.0; self.outputs()];
         let mut background = Background::default();
-        cnn.run(
+        self.run(
             Grid::Sparse(&[], &[]),
             &mut s,
             Some(&mut out),
             Some(&mut background),
             None,
         );
-        cnn.background = background;
-        Ok(cnn)
+        self.background = background;
     }
 
     /// Length of one input grid, `3 · D · H · W`.
@@ -415,17 +421,7 @@ impl Cnn {
             self.int8 = false;
         }
         self.set_row_stem(true);
-        let mut s = self.scratch();
-        let mut out = vec![0.0; self.outputs()];
-        let mut background = Background::default();
-        self.run(
-            Grid::Sparse(&[], &[]),
-            &mut s,
-            Some(&mut out),
-            Some(&mut background),
-            None,
-        );
-        self.background = background;
+        self.record_background();
         Ok(())
     }
 
