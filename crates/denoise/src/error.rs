@@ -49,6 +49,15 @@ pub enum DenoiseError {
         /// what is wrong, naming the pair
         message: String,
     },
+    /// A training recipe is invalid or one of its stages failed
+    /// ([`crate::recipe`]).
+    #[error("{}: {message}", path.display())]
+    Recipe {
+        /// the recipe file, or the stage's folder
+        path: std::path::PathBuf,
+        /// what is wrong, naming the stage
+        message: String,
+    },
     /// A classical filter failed.
     #[error(transparent)]
     Filter(#[from] normalnet_filters::FilterError),

@@ -27,6 +27,7 @@ pub mod error;
 pub mod normalnet;
 pub mod oracle;
 pub mod params;
+pub mod recipe;
 pub mod registry;
 mod scale;
 pub mod suite;

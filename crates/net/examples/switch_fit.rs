@@ -9,8 +9,9 @@
 //! iterations, 1 — a late table (`[switch.late]`) is fitted on the rows
 //! after the main table's clamp).
 
-use normalnet_net::switch::{CANDIDATES, ITERATION_FEATURE, SwitchWeights};
+use normalnet_net::switch::{CANDIDATES, SwitchWeights};
 use normalnet_net::switch_fit::{FitParams, fit};
+use normalnet_net::switch_rows::read_rows;
 
 #[derive(serde::Serialize)]
 struct Table {
@@ -35,22 +36,11 @@ fn env(name: &str, default: usize) -> usize {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let (out, notes, files) = (&args[1], &args[2], &args[3..]);
+    let min_iteration = env("MIN_ITERATION", 1);
     let mut rows = Vec::new();
     for f in files {
-        let bytes = std::fs::read(f)?;
-        rows.extend(
-            bytes
-                .chunks_exact(4)
-                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-        );
+        rows.extend(read_rows(std::path::Path::new(f), min_iteration)?);
     }
-    let min_iteration = env("MIN_ITERATION", 1);
-    let rows: Vec<f32> = rows
-        .chunks_exact(normalnet_net::switch_fit::ROW_LEN)
-        .filter(|r| r[ITERATION_FEATURE] >= min_iteration as f32)
-        .flatten()
-        .copied()
-        .collect();
     let params = FitParams {
         hidden: env("HIDDEN", 32),
         epochs: env("EPOCHS", 40),

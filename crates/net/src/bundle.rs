@@ -73,6 +73,44 @@ pub struct Manifest {
     /// [`crate::switch`]); bundles without one run the paper's form
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub switch: Option<SwitchWeights>,
+    /// the recipe that built the bundle (`normalnet train --recipe`)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recipe: Option<RecipeInfo>,
+    /// the bundle's figures on a validation suite (a recipe's `evaluate`
+    /// stage; `normalnet bench --suite` reproduces them)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub evaluation: Option<Evaluation>,
+}
+
+/// Which recipe built a bundle, and from what code.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RecipeInfo {
+    /// the recipe file as given to `normalnet train --recipe`
+    pub recipe: String,
+    /// FNV-1a 64 (hex) of the recipe and of every file it names
+    pub hash: String,
+    /// `git rev-parse HEAD` of the code that ran it (`-dirty` when the tree
+    /// had changes; empty outside a git checkout)
+    pub commit: String,
+    /// the stages, in order (`kind name`)
+    pub stages: Vec<String>,
+}
+
+/// Mean E_a of a bundle on a validation suite (NormalNet at its defaults).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Evaluation {
+    /// the suite file
+    pub suite: String,
+    /// FNV-1a 64 (hex) of the suite file
+    pub suite_hash: String,
+    /// the settings the pairs ran at, in words
+    pub settings: String,
+    /// mean E_a (degrees) over all pairs
+    pub all_deg: f64,
+    /// mean E_a (degrees) per group
+    pub groups: std::collections::BTreeMap<String, f64>,
+    /// E_a (degrees) per pair
+    pub pairs: std::collections::BTreeMap<String, f64>,
 }
 
 /// Training data and settings shared by the six networks.
@@ -463,7 +501,30 @@ pub fn new_manifest(preset: &str) -> Result<Manifest, NetError> {
             })
             .collect(),
         switch: None,
+        recipe: None,
+        evaluation: None,
     })
+}
+
+/// `git rev-parse HEAD` of the source tree, `-dirty` appended when it has
+/// changes; empty outside a git checkout.
+pub fn commit() -> String {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    match git(&["rev-parse", "HEAD"]) {
+        Some(head) => match git(&["status", "--porcelain", "--untracked-files=no"]) {
+            Some(changes) if !changes.is_empty() => format!("{head}-dirty"),
+            _ => head,
+        },
+        None => String::new(),
+    }
 }
 
 /// `normalnet-net <version>` plus `git describe` of the working tree when

@@ -32,6 +32,7 @@ pub mod plot;
 pub mod step;
 pub mod switch;
 pub mod switch_fit;
+pub mod switch_rows;
 pub mod training;
 pub mod weights_file;
 

@@ -19,7 +19,7 @@
 //! - step counts and wall-clock limits per network come from the config.
 //!
 //! The run is resumable: every few minutes the current weights, Adam state
-//! and step are written to `OUT/checkpoint/`; the best weights (lowest
+//! and step are written to `OUT/checkpoint/step-S/` (and `OUT/state.toml`); the best weights (lowest
 //! validation error) to `OUT/netK.safetensors`; the mesh states `M_k` to
 //! `OUT/states/`. `--resume` continues where it stopped.
 
@@ -96,7 +96,9 @@ pub struct TrainConfig {
     pub validate_every: usize,
     /// faces in the validation set
     pub validation_faces: usize,
-    /// write a resumable checkpoint every this many seconds
+    /// write a resumable checkpoint every this many seconds (0: after
+    /// every step). A resumed run gives the same networks as an
+    /// uninterrupted one (same thread count and kernel path).
     pub checkpoint_seconds: f64,
     /// start network k from network k−1's weights
     pub warm_start: bool,
@@ -432,6 +434,25 @@ fn advance_meshes(
     Ok(())
 }
 
+/// The checkpoint folder of step `step` of the network being trained.
+fn checkpoint_dir(out: &Path, step: usize) -> PathBuf {
+    out.join("checkpoint").join(format!("step-{step}"))
+}
+
+/// Removes the checkpoint folders under `root` but `keep`.
+fn remove_checkpoints(root: &Path, keep: Option<&Path>) {
+    let Ok(entries) = std::fs::read_dir(root) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let path = e.path();
+        if Some(path.as_path()) != keep && path.is_dir() {
+            let _ = std::fs::remove_dir_all(&path);
+        }
+    }
+    Learner::clear_checkpoint(root);
+}
+
 /// Per-network progress, saved in `OUT/state.toml` for `--resume`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct RunState {
@@ -547,7 +568,7 @@ pub fn train(
         total_pool = pool_faces;
         let val = validation_set(&val_pairs, voxel, config, k, residual)?;
         // model: resume checkpoint, else warm start, else fresh
-        let ckpt_dir = out.join("checkpoint");
+        let ckpt_root = out.join("checkpoint");
         let engine = Engine::parse(&config.engine).unwrap_or(Engine::Cnn);
         let loss_fn = config.loss_fn().unwrap_or_default();
         let start_net = if let Some((dir, _)) = &init {
@@ -573,7 +594,9 @@ pub fn train(
             start_net
         };
         let mut learner = Learner::new(engine, &start_net, &model_config, loss_fn)?;
-        let resumed = resume && run.step > 0 && learner.restore(&ckpt_dir, &model_config)?;
+        let resumed = resume
+            && run.step > 0
+            && learner.restore(&checkpoint_dir(out, run.step), &model_config)?;
         if !resumed {
             run.step = 0;
             run.best_val = f64::INFINITY;
@@ -590,7 +613,8 @@ pub fn train(
                 batch_size: config.batch,
                 workers: config.workers,
                 prefetch: 3,
-                seed: config.seed + 100 * k as u64 + run.step as u64,
+                seed: config.seed + 100 * k as u64,
+                first_stream: run.step as u64,
                 yaw_augmentation: true,
                 keep_last: false,
             },
@@ -651,8 +675,14 @@ pub fn train(
             ));
             append_log(&log_path, k, run.step, lr, loss, val_err, run.seconds)?;
             if last_ckpt.elapsed().as_secs_f64() >= config.checkpoint_seconds {
-                learner.checkpoint(&ckpt_dir)?;
+                // the learner's state of step s in checkpoint/step-s, then the
+                // run state naming s, then the older folders go: a run
+                // killed anywhere in between resumes from a matching pair
+                let dir = checkpoint_dir(out, run.step);
+                std::fs::create_dir_all(&dir).map_err(|e| NetError::io(&dir, e))?;
+                learner.checkpoint(&dir)?;
                 save_state(out, &run)?;
+                remove_checkpoints(&ckpt_root, Some(&dir));
                 last_ckpt = Instant::now();
             }
             if time_up {
@@ -694,7 +724,7 @@ pub fn train(
         run.seconds = 0.0;
         run.loss_tail.clear();
         save_state(out, &run)?;
-        Learner::clear_checkpoint(&ckpt_dir);
+        remove_checkpoints(&ckpt_root, None);
     }
     if run.finished < INTERVALS.len() {
         crate::plot::loss_curve_png(&log_path, &out.join("loss.png"))?;

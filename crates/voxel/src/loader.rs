@@ -28,6 +28,11 @@ pub struct LoaderConfig {
     pub prefetch: usize,
     /// Seed of the yaw angles.
     pub seed: u64,
+    /// Batch `b` draws its yaws from stream `first_stream + b` of the seed:
+    /// a loader over the items after the first `s` batches with
+    /// `first_stream = s` gives exactly those batches of the whole run (a
+    /// resumed training run equals an uninterrupted one).
+    pub first_stream: u64,
     /// Random yaw in `[0, 2π)` per item (training augmentation); 0 if false.
     pub yaw_augmentation: bool,
     /// Keep a final batch smaller than `batch_size` (default true).
@@ -41,6 +46,7 @@ impl Default for LoaderConfig {
             workers: 2,
             prefetch: 2,
             seed: 0,
+            first_stream: 0,
             yaw_augmentation: true,
             keep_last: true,
         }
@@ -174,7 +180,7 @@ fn worker(
         let end = (start + config.batch_size).min(items.len());
         let batch_items = items[start..end].to_vec();
         let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
-        rng.set_stream(b as u64);
+        rng.set_stream(config.first_stream + b as u64);
         let mut grids = vec![0.0f32; batch_items.len() * grid_len];
         let mut targets = vec![0.0f32; batch_items.len() * TARGET_LEN];
         let mut yaws = Vec::with_capacity(batch_items.len());

@@ -106,6 +106,46 @@ fn loader_is_deterministic_and_independent_of_worker_count() {
 }
 
 #[test]
+fn a_loader_started_after_some_batches_gives_the_rest_of_the_run() {
+    // what a resumed training run relies on: the items after the first s
+    // batches with first_stream = s are the whole run's batches s, s+1, ...
+    let srcs = Arc::new(sources());
+    let sampler = BalancedSampler::new(srcs.iter());
+    let items = sampler.draw_balanced(30, &mut ChaCha8Rng::seed_from_u64(5));
+    let config = LoaderConfig {
+        batch_size: 8,
+        seed: 7,
+        keep_last: false,
+        ..LoaderConfig::default()
+    };
+    let whole: Vec<_> = Loader::new(Arc::clone(&srcs), items.clone(), config)
+        .unwrap()
+        .collect();
+    let skip = 3;
+    let rest: Vec<_> = Loader::new(
+        Arc::clone(&srcs),
+        items[skip * 8..].to_vec(),
+        LoaderConfig {
+            first_stream: skip as u64,
+            ..config
+        },
+    )
+    .unwrap()
+    .collect();
+    assert_eq!(rest.len(), whole.len() - skip);
+    for (a, b) in whole[skip..].iter().zip(&rest) {
+        assert_eq!(a.items, b.items);
+        assert_eq!(a.yaws, b.yaws);
+        assert_eq!(a.grids, b.grids);
+    }
+    // without the offset the yaws differ (the old resume did that)
+    let unshifted: Vec<_> = Loader::new(Arc::clone(&srcs), items[skip * 8..].to_vec(), config)
+        .unwrap()
+        .collect();
+    assert_ne!(unshifted[0].yaws, rest[0].yaws);
+}
+
+#[test]
 fn loader_drops_cleanly_and_checks_input() {
     let srcs = Arc::new(sources());
     let sampler = BalancedSampler::new(srcs.iter());

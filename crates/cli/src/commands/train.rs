@@ -1,7 +1,10 @@
 //! `normalnet train`: trains a NormalNet model bundle with the iterative
 //! scheme of the paper (§4, SPEC §8; `normalnet_net::training`), or, with
 //! `--method cnr`, a CNR model (SPEC §9.1; `normalnet_denoise::cnr::train`)
-//! on the same training sources and validation meshes.
+//! on the same training sources and validation meshes. With `--recipe`,
+//! every stage of a recipe (`configs/recipes/*.toml`,
+//! `normalnet_denoise::recipe`): networks, switch rows and fits, the
+//! evaluation, resumed where an earlier run in `--out` stopped.
 
 use anyhow::Context;
 use normalnet_net::training::{TrainConfig, train};
@@ -19,8 +22,12 @@ pub struct Args {
     #[arg(long)]
     pub out: PathBuf,
     /// Training configuration (TOML; see configs/train-lite.toml).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "recipe")]
     pub config: Option<PathBuf>,
+    /// A recipe (configs/recipes/*.toml): runs every stage that makes a
+    /// bundle; run again with the same --out it continues where it stopped.
+    #[arg(long)]
+    pub recipe: Option<PathBuf>,
     /// Continue an interrupted run in --out (normalnet).
     #[arg(long)]
     pub resume: bool,
@@ -99,8 +106,45 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
     Ok(())
 }
 
+/// `normalnet train --recipe`.
+fn train_recipe(recipe: &std::path::Path, args: &Args, quiet: bool) -> anyhow::Result<()> {
+    if args.preset.is_some() || args.resume || args.method != "normalnet" {
+        anyhow::bail!(
+            "--recipe takes no --preset, --resume or --method: the recipe says what to train, and a run always resumes"
+        );
+    }
+    crate::output::check_dir(&args.out)?;
+    let bar = crate::progress::Bar::new(quiet);
+    let start = std::time::Instant::now();
+    let outcome = normalnet_denoise::recipe::run(recipe, &args.out, &bar)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "bundle written to {} ({:.0} s)",
+        args.out.display(),
+        start.elapsed().as_secs_f64()
+    )?;
+    for (stage, ran) in &outcome.stages {
+        writeln!(
+            out,
+            "  {stage}: {}",
+            if *ran { "ran" } else { "done before" }
+        )?;
+    }
+    if let Some(e) = &outcome.manifest.evaluation {
+        writeln!(out, "  validation ({}): all {:.3}°", e.suite, e.all_deg)?;
+        for (group, deg) in &e.groups {
+            writeln!(out, "    {group} {deg:.3}°")?;
+        }
+    }
+    Ok(())
+}
+
 /// Runs `normalnet train`.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
+    if let Some(recipe) = &args.recipe {
+        return train_recipe(recipe, &args, quiet);
+    }
     let mut config = match &args.config {
         Some(p) => TrainConfig::read(p).with_context(|| format!("reading {}", p.display()))?,
         None => anyhow::bail!("--config is required (see configs/train-lite.toml)"),

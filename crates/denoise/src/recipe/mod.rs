@@ -1,0 +1,480 @@
+//! Training recipes (issue 35): one TOML file per shipped model
+//! (`configs/recipes/<model>.toml`) lists every stage that makes its
+//! bundle, in order; `normalnet train --recipe FILE --out DIR` runs them
+//! ([`run`]) and resumes at the stage and checkpoint where a run stopped.
+//!
+//! ```toml
+//! name = "lite"
+//! description = "..."
+//!
+//! [[stage]]                      # train the six networks (paper §4)
+//! kind = "networks"
+//! name = "first"
+//! config = "../train-lite.toml"  # a training config, relative to this file
+//!
+//! [[stage]]                      # continue every network of `first`
+//! kind = "networks"
+//! name = "more"
+//! config = "../train-lite-more.toml"
+//! continue_from = "first"        # replaces the config's init_from
+//!
+//! [[stage]]                      # rows for the learned switch
+//! kind = "switch_rows"
+//! name = "rows"
+//! networks = "more"              # whose networks run
+//! follow = ""                    # a switch_fit stage: rows along its path
+//! iterations = 10
+//! pairs = [{ mesh = "shape:60", gaussian = [0.3] }]
+//!
+//! [[stage]]
+//! kind = "switch_fit"
+//! name = "switch"
+//! rows = ["rows"]                # switch_rows stages (a name twice counts twice)
+//!
+//! [[stage]]
+//! kind = "evaluate"
+//! name = "validation"
+//! suite = "../validation.toml"
+//! ```
+//!
+//! The bundle in `DIR` takes the networks of the last `networks` stage,
+//! the `[switch]` table of the last `switch_fit` stage (and `[switch.late]`
+//! of the last one with `late = true`) and the figures of the last
+//! `evaluate` stage; its manifest's `[recipe]` records the recipe, its hash
+//! (the recipe and every file it names) and the commit. Each stage works in
+//! `DIR/stages/NN-name/` and is done when its `DONE` file exists.
+
+mod evaluate;
+mod run;
+mod stages;
+
+pub use run::{RecipeOutcome, run};
+
+use std::path::{Path, PathBuf};
+
+use normalnet_net::training::{SourceSpec, TrainConfig};
+use serde::{Deserialize, Serialize};
+
+use crate::DenoiseError;
+
+/// A recipe as read from its file.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Recipe {
+    /// the model it makes (`lite`, `smoke`, ...)
+    pub name: String,
+    /// what the model is, in words
+    #[serde(default)]
+    pub description: String,
+    /// the stages, run in order
+    #[serde(rename = "stage")]
+    pub stages: Vec<Stage>,
+    /// the recipe file's folder (paths in stages are relative to it)
+    #[serde(skip)]
+    pub folder: PathBuf,
+    /// the recipe file
+    #[serde(skip)]
+    pub file: PathBuf,
+}
+
+/// One stage of a recipe.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Stage {
+    /// Train the six networks (`normalnet_net::training::train`).
+    Networks(NetworksStage),
+    /// Collect learned-switch rows on training pairs
+    /// (`normalnet_net::switch_rows::trace`).
+    SwitchRows(RowsStage),
+    /// Fit a switch table to rows (`normalnet_net::switch_fit::fit`).
+    SwitchFit(FitStage),
+    /// Run the bundle made so far on a validation suite.
+    Evaluate(EvaluateStage),
+}
+
+/// Stage `networks`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NetworksStage {
+    /// the stage's name (its folder `NN-name`)
+    pub name: String,
+    /// the training config (TOML, relative to the recipe's folder)
+    pub config: String,
+    /// an earlier `networks` stage whose bundle this one continues (the
+    /// config's `init_from` is replaced by it); empty = the config's own
+    #[serde(default)]
+    pub continue_from: String,
+}
+
+/// Stage `switch_rows`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RowsStage {
+    /// the stage's name
+    pub name: String,
+    /// the `networks` stage whose bundle runs
+    pub networks: String,
+    /// a `switch_fit` stage: the vertices follow the switch made up to it
+    /// (its main table and the late table fitted before it); empty = the
+    /// network's output (the paper's form)
+    #[serde(default)]
+    pub follow: String,
+    /// the pairs: clean sources and their noise, as training sources are
+    /// written (paths under the data folder or `shape:SEED`)
+    pub pairs: Vec<SourceSpec>,
+    /// seed of the pairs' noise (seed + 1000·pair + copy, as training)
+    #[serde(default = "default_rows_seed")]
+    pub seed: u64,
+    /// face count of procedural shapes
+    #[serde(default = "default_shape_faces")]
+    pub shape_faces: usize,
+    /// normal-filtering iterations per run
+    #[serde(default = "default_iterations")]
+    pub iterations: usize,
+    /// μ_g of the runs
+    #[serde(default = "default_mu_g")]
+    pub mu_g: f64,
+    /// vertex updates per iteration
+    #[serde(default = "default_vertex_iterations")]
+    pub vertex_iterations: usize,
+    /// the flat skip of the denoiser (degrees; 0 = off)
+    #[serde(default)]
+    pub flat_skip_deg: f64,
+    /// rows of earlier iterations are not kept
+    #[serde(default = "one")]
+    pub min_iteration: usize,
+    /// residual blocks in 8-bit integers, as the denoiser runs by default
+    /// (where the CPU has AVX2)
+    #[serde(default = "yes")]
+    pub int8: bool,
+}
+
+/// Stage `switch_fit`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FitStage {
+    /// the stage's name
+    pub name: String,
+    /// `switch_rows` stages whose rows it reads (a name given twice counts
+    /// its rows twice)
+    pub rows: Vec<String>,
+    /// hidden units
+    #[serde(default = "default_hidden")]
+    pub hidden: usize,
+    /// passes over the rows
+    #[serde(default = "default_epochs")]
+    pub epochs: usize,
+    /// shuffling and initialisation
+    #[serde(default = "one_u64")]
+    pub seed: u64,
+    /// the iteration feature's clamp
+    #[serde(default = "default_max_iteration")]
+    pub max_iteration: usize,
+    /// rows of earlier iterations are left out
+    #[serde(default = "one")]
+    pub min_iteration: usize,
+    /// a late table (`[switch.late]`, the iterations after the main
+    /// table's clamp) instead of the main one
+    #[serde(default)]
+    pub late: bool,
+    /// written into the table's `notes`
+    #[serde(default)]
+    pub notes: String,
+}
+
+/// Stage `evaluate`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvaluateStage {
+    /// the stage's name
+    pub name: String,
+    /// the validation suite (relative to the recipe's folder)
+    pub suite: String,
+    /// NormalNet parameters laid over its defaults (as `bench.toml`'s)
+    #[serde(default)]
+    pub params: serde_json::Map<String, serde_json::Value>,
+}
+
+fn default_rows_seed() -> u64 {
+    5000
+}
+fn default_shape_faces() -> usize {
+    2000
+}
+fn default_iterations() -> usize {
+    10
+}
+fn default_mu_g() -> f64 {
+    0.35
+}
+fn default_vertex_iterations() -> usize {
+    20
+}
+fn default_hidden() -> usize {
+    32
+}
+fn default_epochs() -> usize {
+    40
+}
+fn default_max_iteration() -> usize {
+    normalnet_net::switch::DEFAULT_MAX_ITERATION
+}
+fn one() -> usize {
+    1
+}
+fn one_u64() -> u64 {
+    1
+}
+fn yes() -> bool {
+    true
+}
+
+impl Stage {
+    /// The stage's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Stage::Networks(s) => &s.name,
+            Stage::SwitchRows(s) => &s.name,
+            Stage::SwitchFit(s) => &s.name,
+            Stage::Evaluate(s) => &s.name,
+        }
+    }
+
+    /// The stage's kind as written in the recipe.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Stage::Networks(_) => "networks",
+            Stage::SwitchRows(_) => "switch_rows",
+            Stage::SwitchFit(_) => "switch_fit",
+            Stage::Evaluate(_) => "evaluate",
+        }
+    }
+}
+
+impl Recipe {
+    /// Reads and checks a recipe ([`Recipe::parse`]).
+    ///
+    /// # Errors
+    /// [`DenoiseError::Recipe`] naming the file and the stage.
+    pub fn load(file: &Path) -> Result<Recipe, DenoiseError> {
+        let text = std::fs::read_to_string(file).map_err(|e| recipe_error(file, e.to_string()))?;
+        Recipe::parse(&text, file)
+    }
+
+    /// Parses and checks a recipe's text; `file` places its relative paths.
+    ///
+    /// # Errors
+    /// [`DenoiseError::Recipe`]: invalid TOML, no `networks` stage, stage
+    /// names empty, unsafe or used twice, references to a stage that is
+    /// not an earlier one of the right kind, unreadable or invalid training
+    /// configs and suites, test data among the pairs, values out of range.
+    pub fn parse(text: &str, file: &Path) -> Result<Recipe, DenoiseError> {
+        let mut recipe: Recipe =
+            toml::from_str(text).map_err(|e| recipe_error(file, e.to_string()))?;
+        recipe.file = file.to_path_buf();
+        recipe.folder = file
+            .parent()
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        recipe.check()?;
+        Ok(recipe)
+    }
+
+    /// A path of a stage, relative to the recipe's folder.
+    pub fn path(&self, relative: &str) -> PathBuf {
+        self.folder.join(relative)
+    }
+
+    /// The stage folder of stage `i` inside `out`.
+    pub fn stage_dir(&self, out: &Path, i: usize) -> PathBuf {
+        out.join("stages")
+            .join(format!("{:02}-{}", i + 1, self.stages[i].name()))
+    }
+
+    /// Index of the stage called `name`.
+    pub fn index_of(&self, name: &str) -> Option<usize> {
+        self.stages.iter().position(|s| s.name() == name)
+    }
+
+    /// The training config of a `networks` stage (its `init_from` not yet
+    /// replaced).
+    ///
+    /// # Errors
+    /// An unreadable or invalid config, naming the stage.
+    pub fn train_config(&self, stage: &NetworksStage) -> Result<TrainConfig, DenoiseError> {
+        let path = self.path(&stage.config);
+        TrainConfig::read(&path).map_err(|e| self.stage_error(&stage.name, e.to_string()))
+    }
+
+    /// FNV-1a 64 (hex) of the recipe's text and of every file it names
+    /// (training configs, suites): a run in a folder continues only under
+    /// the same hash.
+    ///
+    /// # Errors
+    /// A named file that cannot be read.
+    pub fn hash(&self) -> Result<String, DenoiseError> {
+        let mut files = vec![self.file.clone()];
+        for stage in &self.stages {
+            match stage {
+                Stage::Networks(s) => files.push(self.path(&s.config)),
+                Stage::Evaluate(s) => files.push(self.path(&s.suite)),
+                _ => {}
+            }
+        }
+        let mut bytes = Vec::new();
+        for f in &files {
+            let content = std::fs::read(f).map_err(|e| recipe_error(f, format!("reading: {e}")))?;
+            bytes.extend_from_slice(&(content.len() as u64).to_le_bytes());
+            bytes.extend_from_slice(&content);
+        }
+        Ok(format!("{:016x}", crate::suite::fnv1a(&bytes)))
+    }
+
+    fn stage_error(&self, stage: &str, message: String) -> DenoiseError {
+        recipe_error(&self.file, format!("stage {stage:?}: {message}"))
+    }
+
+    /// The index of the earlier stage `name` refers to, checked to be of
+    /// `kind`.
+    fn earlier(
+        &self,
+        at: usize,
+        name: &str,
+        kind: &str,
+        what: &str,
+    ) -> Result<usize, DenoiseError> {
+        let me = self.stages[at].name();
+        match self.index_of(name) {
+            Some(i) if i < at && self.stages[i].kind() == kind => Ok(i),
+            Some(i) if i < at => Err(self.stage_error(
+                me,
+                format!(
+                    "{what} {name:?} is a {} stage, expected {kind}",
+                    self.stages[i].kind()
+                ),
+            )),
+            _ => Err(self.stage_error(me, format!("{what} {name:?} is no earlier {kind} stage"))),
+        }
+    }
+
+    fn check(&self) -> Result<(), DenoiseError> {
+        if self.stages.is_empty() {
+            return Err(recipe_error(&self.file, "no [[stage]] entries".into()));
+        }
+        for (i, stage) in self.stages.iter().enumerate() {
+            let n = stage.name();
+            if n.is_empty()
+                || n.starts_with('.')
+                || !n
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c))
+            {
+                return Err(
+                    self.stage_error(n, "a name is letters, digits, '.', '_' and '-' only".into())
+                );
+            }
+            if self.stages[..i].iter().any(|s| s.name() == n) {
+                return Err(self.stage_error(n, "the name is used twice".into()));
+            }
+            self.check_stage(i)?;
+        }
+        if !self.stages.iter().any(|s| matches!(s, Stage::Networks(_))) {
+            return Err(recipe_error(
+                &self.file,
+                "no networks stage: a bundle needs one".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_stage(&self, i: usize) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(self.stages[i].name(), message);
+        match &self.stages[i] {
+            Stage::Networks(s) => {
+                let config = self.train_config(s)?;
+                if config.stop_after < 6 {
+                    return Err(bad(format!(
+                        "the config trains {} of 6 networks (stop_after): no bundle",
+                        config.stop_after
+                    )));
+                }
+                if !s.continue_from.is_empty() {
+                    self.earlier(i, &s.continue_from, "networks", "continue_from")?;
+                }
+            }
+            Stage::SwitchRows(s) => {
+                self.earlier(i, &s.networks, "networks", "networks")?;
+                if !s.follow.is_empty() {
+                    self.earlier(i, &s.follow, "switch_fit", "follow")?;
+                }
+                if s.pairs.is_empty() {
+                    return Err(bad("no pairs".into()));
+                }
+                if s.iterations == 0 || s.vertex_iterations == 0 || s.min_iteration == 0 {
+                    return Err(bad(
+                        "iterations, vertex_iterations and min_iteration must be positive".into(),
+                    ));
+                }
+                if s.min_iteration > s.iterations {
+                    return Err(bad(format!(
+                        "min_iteration {} > iterations {}: no rows",
+                        s.min_iteration, s.iterations
+                    )));
+                }
+                if !(s.mu_g > 0.0 && s.mu_g < 10.0 && (0.0..=90.0).contains(&s.flat_skip_deg)) {
+                    return Err(bad(
+                        "mu_g must lie in (0, 10), flat_skip_deg in [0, 90]".into()
+                    ));
+                }
+                // the pairs are training data: TrainConfig's checks refuse test models
+                stages::rows_config(s)
+                    .validate(&self.file)
+                    .map_err(|e| bad(e.to_string()))?;
+            }
+            Stage::SwitchFit(s) => {
+                if s.rows.is_empty() {
+                    return Err(bad("no rows stages".into()));
+                }
+                for r in &s.rows {
+                    self.earlier(i, r, "switch_rows", "rows")?;
+                }
+                if s.hidden == 0 || s.epochs == 0 || s.max_iteration == 0 || s.min_iteration == 0 {
+                    return Err(bad(
+                        "hidden, epochs, max_iteration and min_iteration must be positive".into(),
+                    ));
+                }
+                if s.late && s.min_iteration <= 1 {
+                    return Err(bad(
+                        "a late table is fitted on the iterations after the main table's clamp: set min_iteration".into(),
+                    ));
+                }
+                if s.late
+                    && !self.stages[..i]
+                        .iter()
+                        .any(|t| matches!(t, Stage::SwitchFit(f) if !f.late))
+                {
+                    return Err(bad(
+                        "a late table needs an earlier main switch_fit stage".into()
+                    ));
+                }
+            }
+            Stage::Evaluate(s) => {
+                crate::suite::Suite::load(&self.path(&s.suite)).map_err(|e| bad(e.to_string()))?;
+                let params: crate::Params = s.params.clone();
+                if params.contains_key("model") {
+                    return Err(bad("params: the model is the recipe's bundle".into()));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn recipe_error(path: &Path, message: String) -> DenoiseError {
+    DenoiseError::Recipe {
+        path: path.to_path_buf(),
+        message,
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,162 @@
+//! Running a recipe: its stages in order, each in its folder, skipped when
+//! done; then the bundle, assembled in the output folder.
+
+use std::path::Path;
+
+use normalnet_mesh::Progress;
+use normalnet_net::bundle::{Evaluation, MANIFEST, Manifest, RecipeInfo, network_file};
+use serde::{Deserialize, Serialize};
+
+use super::evaluate::{evaluate, read_evaluation};
+use super::stages::{self, write_file};
+use super::{Recipe, Stage, recipe_error};
+use crate::DenoiseError;
+
+/// The file that ties an output folder to one recipe (`OUT/recipe-run.toml`).
+const RUN_FILE: &str = "recipe-run.toml";
+/// A stage is done when its folder holds this file.
+const DONE: &str = "DONE";
+
+/// What ties an output folder to a recipe.
+#[derive(Debug, Serialize, Deserialize, PartialEq)]
+struct RunFile {
+    recipe: String,
+    hash: String,
+}
+
+/// What a finished recipe run gives.
+#[derive(Debug)]
+pub struct RecipeOutcome {
+    /// the bundle's manifest (as written to `OUT/manifest.toml`)
+    pub manifest: Manifest,
+    /// per stage: its kind and name, and whether this call ran it (false:
+    /// it was done by an earlier call)
+    pub stages: Vec<(String, bool)>,
+}
+
+/// Runs the recipe in `file` into `out`: every stage not yet done, then the
+/// bundle (`OUT/net1..6.safetensors`, `OUT/manifest.toml`, written last).
+/// Run again on the same folder it continues where it stopped; a folder of
+/// another recipe (or of this one edited since) is refused.
+///
+/// # Errors
+/// [`DenoiseError::Recipe`] naming the recipe or the stage's folder; the
+/// errors of the stages (training, meshes, suites).
+pub fn run(
+    file: &Path,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<RecipeOutcome, DenoiseError> {
+    let recipe = Recipe::load(file)?;
+    let hash = recipe.hash()?;
+    claim(&recipe, &hash, out)?;
+    let cache = out.join("validation-cache");
+    let mut ran = Vec::new();
+    for (i, stage) in recipe.stages.iter().enumerate() {
+        let dir = recipe.stage_dir(out, i);
+        let label = format!("{} {}", stage.kind(), stage.name());
+        if dir.join(DONE).is_file() {
+            ran.push((label, false));
+            continue;
+        }
+        progress.message(&format!("stage {}/{}: {label}", i + 1, recipe.stages.len()));
+        std::fs::create_dir_all(&dir).map_err(|e| recipe_error(&dir, e.to_string()))?;
+        match stage {
+            Stage::Networks(s) => stages::networks(&recipe, s, out, &dir, progress)?,
+            Stage::SwitchRows(s) => stages::switch_rows(&recipe, s, out, &dir, progress)?,
+            Stage::SwitchFit(s) => stages::switch_fit(&recipe, s, out, &dir, progress)?,
+            Stage::Evaluate(s) => {
+                let bundle = dir.join("bundle");
+                assemble(&recipe, &hash, out, i, &bundle)?;
+                evaluate(&recipe, s, &bundle, &cache, &dir, progress)?;
+            }
+        }
+        write_file(&dir.join(DONE), label.as_bytes())?;
+        ran.push((label, true));
+    }
+    let manifest = assemble(&recipe, &hash, out, recipe.stages.len(), out)?;
+    Ok(RecipeOutcome {
+        manifest,
+        stages: ran,
+    })
+}
+
+/// Ties `out` to the recipe (first run) or checks that it is tied to it.
+fn claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<(), DenoiseError> {
+    let path = out.join(RUN_FILE);
+    let mine = RunFile {
+        recipe: recipe.file.display().to_string(),
+        hash: hash.to_string(),
+    };
+    match std::fs::read_to_string(&path) {
+        Ok(text) => {
+            let theirs: RunFile =
+                toml::from_str(&text).map_err(|e| recipe_error(&path, e.to_string()))?;
+            if theirs.hash != mine.hash {
+                return Err(recipe_error(
+                    out,
+                    format!(
+                        "holds a run of recipe {} (hash {}), not of {} (hash {}): the recipe or a file it names changed; choose another --out or remove this one",
+                        theirs.recipe, theirs.hash, mine.recipe, mine.hash
+                    ),
+                ));
+            }
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::create_dir_all(out).map_err(|e| recipe_error(out, e.to_string()))?;
+            let text = toml::to_string(&mine).map_err(|e| recipe_error(&path, e.to_string()))?;
+            write_file(&path, text.as_bytes())
+        }
+        Err(e) => Err(recipe_error(&path, e.to_string())),
+    }
+}
+
+/// The bundle made by the stages before `upto`, written to `target`: the
+/// last `networks` stage's networks and manifest, the switch of the
+/// `switch_fit` stages, the figures of the last `evaluate` stage, and the
+/// recipe's record. The manifest is written last.
+fn assemble(
+    recipe: &Recipe,
+    hash: &str,
+    out: &Path,
+    upto: usize,
+    target: &Path,
+) -> Result<Manifest, DenoiseError> {
+    let last = |kind: &str| (0..upto).rev().find(|&i| recipe.stages[i].kind() == kind);
+    let networks = last("networks")
+        .ok_or_else(|| recipe_error(&recipe.file, "no networks stage before this one".into()))?;
+    let source = recipe.stage_dir(out, networks);
+    std::fs::create_dir_all(target).map_err(|e| recipe_error(target, e.to_string()))?;
+    let mut manifest = Manifest::read(&source.join(MANIFEST))?;
+    for i in 0..manifest.networks.len() {
+        let name = network_file(i);
+        if source != target {
+            std::fs::copy(source.join(&name), target.join(&name))
+                .map_err(|e| recipe_error(&target.join(&name), e.to_string()))?;
+        }
+    }
+    manifest.switch = match last("switch_fit") {
+        Some(i) => stages::switch_upto(recipe, out, i)?,
+        None => None,
+    };
+    manifest.evaluation = match last("evaluate") {
+        Some(i) => Some(read_evaluation(&recipe.stage_dir(out, i))?),
+        None => None::<Evaluation>,
+    };
+    // the output folder is this machine's: the manifest names it OUT
+    let here = out.display().to_string();
+    manifest.training.notes = manifest.training.notes.replace(&here, "OUT");
+    manifest.recipe = Some(RecipeInfo {
+        recipe: recipe.file.display().to_string(),
+        hash: hash.to_string(),
+        commit: normalnet_net::bundle::commit(),
+        stages: recipe
+            .stages
+            .iter()
+            .map(|s| format!("{} {}", s.kind(), s.name()))
+            .collect(),
+    });
+    manifest.write(&target.join(MANIFEST))?;
+    Ok(manifest)
+}

@@ -1,0 +1,242 @@
+//! What each kind of recipe stage does in its folder. A stage that stops
+//! part way is run again from its start, except where it says otherwise
+//! (`networks` resumes from the training checkpoint, `switch_rows` keeps
+//! the pairs it finished).
+
+use std::path::{Path, PathBuf};
+
+use normalnet_mesh::Progress;
+use normalnet_net::Bundle;
+use normalnet_net::switch::SwitchWeights;
+use normalnet_net::switch_fit::{FitParams, ROW_LEN, fit};
+use normalnet_net::switch_rows::{TracePath, TraceSettings, read_rows, trace, write_rows};
+use normalnet_net::training::{TrainConfig, noisy_pairs, train};
+use serde::{Deserialize, Serialize};
+
+use super::{FitStage, NetworksStage, Recipe, RowsStage, recipe_error};
+use crate::DenoiseError;
+
+/// The file a `switch_fit` stage writes its table to.
+pub(super) const SWITCH_FILE: &str = "switch.toml";
+
+/// A training config carrying a rows stage's pairs, so that they are made
+/// (and checked against the test data) exactly as training sources are.
+pub(super) fn rows_config(stage: &RowsStage) -> TrainConfig {
+    TrainConfig {
+        sources: stage.pairs.clone(),
+        shape_faces: stage.shape_faces,
+        ..TrainConfig::default()
+    }
+}
+
+/// `networks`: the six networks, trained (or continued) into `dir`.
+pub(super) fn networks(
+    recipe: &Recipe,
+    stage: &NetworksStage,
+    out: &Path,
+    dir: &Path,
+    progress: &dyn Progress,
+) -> Result<(), DenoiseError> {
+    let mut config = recipe.train_config(stage)?;
+    if !stage.continue_from.is_empty() {
+        let from = recipe
+            .index_of(&stage.continue_from)
+            .expect("checked by Recipe::check");
+        config.init_from = recipe.stage_dir(out, from).display().to_string();
+    }
+    let resume = dir.join("state.toml").is_file();
+    train(&config, dir, resume, progress)
+        .map_err(|e| recipe_error(dir, format!("stage {:?}: {e}", stage.name)))?;
+    Ok(())
+}
+
+/// What a `switch_rows` stage saw, per pair (`DIR/trace.toml`).
+#[derive(Debug, Default, Serialize, Deserialize)]
+struct RowsReport {
+    /// the precision the residual blocks ran in
+    precision: String,
+    pairs: Vec<PairReport>,
+}
+
+#[derive(Debug, Default, Serialize, Deserialize)]
+struct PairReport {
+    name: String,
+    rows: usize,
+    e_a_deg: Vec<f64>,
+    chosen: Vec<usize>,
+}
+
+/// `switch_rows`: one rows file per noisy pair (`pair-N.bin`), written
+/// whole; a pair whose file exists is not run again.
+pub(super) fn switch_rows(
+    recipe: &Recipe,
+    stage: &RowsStage,
+    out: &Path,
+    dir: &Path,
+    progress: &dyn Progress,
+) -> Result<(), DenoiseError> {
+    let fail =
+        |e: &dyn std::fmt::Display| recipe_error(dir, format!("stage {:?}: {e}", stage.name));
+    let networks = recipe.index_of(&stage.networks).expect("checked");
+    let mut bundle = Bundle::load(recipe.stage_dir(out, networks)).map_err(|e| fail(&e))?;
+    let precision = if stage.int8 {
+        bundle.set_precision(normalnet_net::Precision::Int8)
+    } else {
+        bundle.set_precision(normalnet_net::Precision::F32)
+    };
+    let path = if stage.follow.is_empty() {
+        TracePath::Candidate(0)
+    } else {
+        let upto = recipe.index_of(&stage.follow).expect("checked");
+        TracePath::Learned(switch_upto(recipe, out, upto)?.expect("a switch_fit stage"))
+    };
+    let settings = TraceSettings {
+        iterations: stage.iterations,
+        mu_g: stage.mu_g,
+        vertex_iterations: stage.vertex_iterations,
+        flat_skip_deg: stage.flat_skip_deg,
+        min_iteration: stage.min_iteration,
+        ..TraceSettings::default()
+    };
+    let config = rows_config(stage);
+    let pairs =
+        noisy_pairs(&config, &config.sources, stage.seed, progress).map_err(|e| fail(&e))?;
+    let mut report = RowsReport {
+        precision: format!("{precision:?}"),
+        pairs: Vec::new(),
+    };
+    progress.start(&format!("rows {}", stage.name), pairs.len() as u64);
+    for (i, (name, clean, noisy)) in pairs.iter().enumerate() {
+        let file = rows_file(dir, i);
+        if file.is_file() {
+            let rows = read_rows(&file, 1).map_err(|e| fail(&e))?;
+            report.pairs.push(PairReport {
+                name: name.clone(),
+                rows: rows.len() / ROW_LEN,
+                ..PairReport::default()
+            });
+        } else {
+            progress.message(&format!("tracing {name}"));
+            let t = trace(&bundle, noisy, clean, &path, &settings).map_err(|e| fail(&e))?;
+            write_rows(&file, &t.rows).map_err(|e| fail(&e))?;
+            report.pairs.push(PairReport {
+                name: name.clone(),
+                rows: t.rows.len() / ROW_LEN,
+                e_a_deg: t.e_a_deg,
+                chosen: t.chosen.to_vec(),
+            });
+        }
+        progress.advance(1);
+    }
+    progress.finish();
+    let text = toml::to_string(&report).map_err(|e| fail(&e))?;
+    write_file(&dir.join("trace.toml"), text.as_bytes())
+}
+
+fn rows_file(dir: &Path, pair: usize) -> PathBuf {
+    dir.join(format!("pair-{pair}.bin"))
+}
+
+/// The rows files of a `switch_rows` stage, in pair order.
+fn rows_files(dir: &Path) -> Result<Vec<PathBuf>, DenoiseError> {
+    let mut files = Vec::new();
+    while rows_file(dir, files.len()).is_file() {
+        files.push(rows_file(dir, files.len()));
+    }
+    if files.is_empty() {
+        return Err(recipe_error(dir, "no rows files (pair-0.bin ...)".into()));
+    }
+    Ok(files)
+}
+
+#[derive(Serialize, Deserialize)]
+struct SwitchFile {
+    switch: SwitchWeights,
+}
+
+/// `switch_fit`: the table, written to `DIR/switch.toml` (`[switch]`).
+pub(super) fn switch_fit(
+    recipe: &Recipe,
+    stage: &FitStage,
+    out: &Path,
+    dir: &Path,
+    progress: &dyn Progress,
+) -> Result<(), DenoiseError> {
+    let fail =
+        |e: &dyn std::fmt::Display| recipe_error(dir, format!("stage {:?}: {e}", stage.name));
+    let mut rows = Vec::new();
+    for r in &stage.rows {
+        let i = recipe.index_of(r).expect("checked");
+        for f in rows_files(&recipe.stage_dir(out, i))? {
+            rows.extend(read_rows(&f, stage.min_iteration).map_err(|e| fail(&e))?);
+        }
+    }
+    progress.message(&format!(
+        "fitting {} on {} rows",
+        stage.name,
+        rows.len() / ROW_LEN
+    ));
+    let params = FitParams {
+        hidden: stage.hidden,
+        epochs: stage.epochs,
+        seed: stage.seed,
+        max_iteration: stage.max_iteration,
+        ..FitParams::default()
+    };
+    let (mut weights, report) = fit(&rows, &[0, 1, 2, 3], &params).map_err(|e| fail(&e))?;
+    weights.notes = format!(
+        "{}{}fitted by recipe {} stage {:?} ({} hidden, {} epochs, seed {}, iteration clamp {}, iterations >= {}) on {} rows of {}; expected angle {:.3} deg in the last epoch (per candidate {:.3?}, per-row best {:.3})",
+        stage.notes,
+        if stage.notes.is_empty() { "" } else { "; " },
+        recipe.name,
+        stage.name,
+        stage.hidden,
+        stage.epochs,
+        stage.seed,
+        stage.max_iteration,
+        stage.min_iteration,
+        rows.len() / ROW_LEN,
+        stage.rows.join(", "),
+        report.epoch_loss.last().copied().unwrap_or(f64::NAN),
+        report.candidate_mean_deg,
+        report.best_mean_deg,
+    );
+    let text = toml::to_string(&SwitchFile { switch: weights }).map_err(|e| fail(&e))?;
+    write_file(&dir.join(SWITCH_FILE), text.as_bytes())
+}
+
+/// The switch made by the `switch_fit` stages up to and including `upto`:
+/// the last main table, with the last late table fitted after it; none
+/// without a main table.
+pub(super) fn switch_upto(
+    recipe: &Recipe,
+    out: &Path,
+    upto: usize,
+) -> Result<Option<SwitchWeights>, DenoiseError> {
+    let mut main: Option<SwitchWeights> = None;
+    for (i, stage) in recipe.stages[..=upto].iter().enumerate() {
+        let super::Stage::SwitchFit(fit) = stage else {
+            continue;
+        };
+        let file = recipe.stage_dir(out, i).join(SWITCH_FILE);
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| recipe_error(&file, format!("reading: {e}")))?;
+        let table = toml::from_str::<SwitchFile>(&text)
+            .map_err(|e| recipe_error(&file, e.to_string()))?
+            .switch;
+        if fit.late {
+            if let Some(m) = main.as_mut() {
+                m.late = Some(Box::new(table));
+            }
+        } else {
+            main = Some(table);
+        }
+    }
+    Ok(main)
+}
+
+/// Writes `bytes` to `path` whole (never a partial file).
+pub(super) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), DenoiseError> {
+    normalnet_mesh::io::write_atomically(path, |w| w.write_all(bytes))
+        .map_err(|e| recipe_error(path, e.to_string()))
+}

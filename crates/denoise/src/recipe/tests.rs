@@ -1,0 +1,112 @@
+use super::*;
+
+/// A recipe in a temporary folder beside a copy of the smoke training config.
+fn recipe_in(dir: &Path, text: &str) -> Result<Recipe, DenoiseError> {
+    let config = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/train-smoke.toml"
+    );
+    std::fs::copy(config, dir.join("train.toml")).unwrap();
+    let file = dir.join("r.toml");
+    std::fs::write(&file, text).unwrap();
+    Recipe::load(&file)
+}
+
+const NETWORKS: &str = r#"
+name = "t"
+[[stage]]
+kind = "networks"
+name = "nets"
+config = "train.toml"
+"#;
+
+#[test]
+fn a_recipe_reads_its_stages_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        "{NETWORKS}
+[[stage]]
+kind = \"switch_rows\"
+name = \"rows\"
+networks = \"nets\"
+iterations = 2
+pairs = [{{ mesh = \"shape:60\", gaussian = [0.3] }}]
+
+[[stage]]
+kind = \"switch_fit\"
+name = \"fit\"
+rows = [\"rows\", \"rows\"]
+epochs = 2
+"
+    );
+    let r = recipe_in(dir.path(), &text).unwrap();
+    let kinds: Vec<&str> = r.stages.iter().map(Stage::kind).collect();
+    assert_eq!(kinds, ["networks", "switch_rows", "switch_fit"]);
+    let Stage::SwitchRows(rows) = &r.stages[1] else {
+        panic!("rows")
+    };
+    assert_eq!(
+        (rows.mu_g, rows.vertex_iterations, rows.int8),
+        (0.35, 20, true)
+    );
+    assert!(r.stage_dir(Path::new("out"), 2).ends_with("stages/03-fit"));
+    // the hash covers the config the recipe names
+    let before = r.hash().unwrap();
+    std::fs::write(
+        dir.path().join("train.toml"),
+        "preset = \"lite\"\nseed = 9\n",
+    )
+    .unwrap();
+    assert_ne!(r.hash().unwrap(), before);
+}
+
+#[test]
+fn bad_recipes_are_refused_naming_the_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    let refused = |extra: &str, expected: &str| {
+        let err = recipe_in(dir.path(), &format!("{NETWORKS}{extra}"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(expected), "{extra}: {err}");
+    };
+    refused(
+        "[[stage]]\nkind = \"switch_fit\"\nname = \"fit\"\nrows = [\"nets\"]\n",
+        "rows \"nets\" is a networks stage, expected switch_rows",
+    );
+    refused(
+        "[[stage]]\nkind = \"switch_fit\"\nname = \"fit\"\nrows = [\"later\"]\n",
+        "rows \"later\" is no earlier switch_rows stage",
+    );
+    refused(
+        "[[stage]]\nkind = \"networks\"\nname = \"nets\"\nconfig = \"train.toml\"\n",
+        "stage \"nets\": the name is used twice",
+    );
+    refused(
+        "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = [{ mesh = \"gd/Fandisk0.3/Original.obj\", gaussian = [0.3] }]\n",
+        "Fandisk0.3",
+    );
+    refused(
+        "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = []\n",
+        "no pairs",
+    );
+    refused(
+        "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = [{ mesh = \"shape:1\", gaussian = [0.3] }]\n[[stage]]\nkind = \"switch_fit\"\nname = \"late\"\nrows = [\"rows\"]\nlate = true\nmin_iteration = 11\n",
+        "a late table needs an earlier main switch_fit stage",
+    );
+    refused(
+        "[[stage]]\nkind = \"evaluate\"\nname = \"e\"\nsuite = \"missing.toml\"\n",
+        "missing.toml",
+    );
+    refused(
+        "[[stage]]\nkind = \"train\"\nname = \"x\"\n",
+        "unknown variant",
+    );
+    refused(
+        "[[stage]]\nkind = \"networks\"\nname = \"n2\"\nconfig = \"train.toml\"\nwarm = 1\n",
+        "unknown field",
+    );
+    let err = recipe_in(dir.path(), "name = \"t\"\nstage = []\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no [[stage]]"), "{err}");
+}
