@@ -57,6 +57,8 @@ const REGEN_VERTEX_ITERATIONS: usize = 20;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SourceSpec {
     /// path relative to `data_dir`, or `shape:SEED` for a procedural shape
+    /// (`shape:KIND:SEED`: of that kind, e.g. `shape:polyhedron:160`, as
+    /// `normalnet shapes --kind`)
     pub mesh: String,
     /// noisy copies: Gaussian levels L (σ = L·l_e)
     #[serde(default)]
@@ -318,15 +320,24 @@ struct Pair {
 }
 
 fn load_source(config: &TrainConfig, spec: &SourceSpec) -> Result<Mesh, NetError> {
-    if let Some(seed) = spec.mesh.strip_prefix("shape:") {
-        let seed: u64 = seed.parse().map_err(|_| NetError::BadConfig {
+    if let Some(rest) = spec.mesh.strip_prefix("shape:") {
+        let bad = || NetError::BadConfig {
             path: PathBuf::from("<config>"),
-            message: format!("{}: expected shape:SEED", spec.mesh),
-        })?;
-        Ok(normalnet_voxel::shapes::generate_seeded(
-            seed,
-            config.shape_faces,
-        )?)
+            message: format!("{}: expected shape:SEED or shape:KIND:SEED", spec.mesh),
+        };
+        // shape:SEED (the kind the seed picks) or shape:KIND:SEED
+        let (kind, seed) = match rest.split_once(':') {
+            Some((kind, seed)) => (
+                Some(normalnet_voxel::shapes::ShapeKind::from_name(kind)?),
+                seed,
+            ),
+            None => (None, rest),
+        };
+        let seed: u64 = seed.parse().map_err(|_| bad())?;
+        Ok(match kind {
+            Some(kind) => normalnet_voxel::shapes::generate(kind, seed, config.shape_faces)?,
+            None => normalnet_voxel::shapes::generate_seeded(seed, config.shape_faces)?,
+        })
     } else {
         Ok(normalnet_mesh::read_mesh(
             config.data_dir().join(&spec.mesh),

@@ -173,6 +173,10 @@ pub struct FitStage {
     /// rows of earlier iterations are left out
     #[serde(default = "one")]
     pub min_iteration: usize,
+    /// rows of later iterations are left out (0 = none): the first
+    /// iterations of long runs
+    #[serde(default)]
+    pub last_iteration: usize,
     /// a late table (`[switch.late]`, the iterations after the main
     /// table's clamp) instead of the main one
     #[serde(default)]
@@ -377,11 +381,44 @@ impl Recipe {
             }
             self.check_stage(i)?;
         }
+        self.check_held_out()?;
         if !self.stages.iter().any(|s| matches!(s, Stage::Networks(_))) {
             return Err(recipe_error(
                 &self.file,
                 "no networks stage: a bundle needs one".into(),
             ));
+        }
+        Ok(())
+    }
+
+    /// No training source (networks' sources, switch pairs) is a source of
+    /// a suite the recipe evaluates on: selection data stays out of
+    /// training.
+    fn check_held_out(&self) -> Result<(), DenoiseError> {
+        let mut held_out = Vec::new();
+        for stage in &self.stages {
+            if let Stage::Evaluate(e) = stage {
+                let suite = crate::suite::Suite::load(&self.path(&e.suite))?;
+                held_out.extend(suite.pairs.into_iter().map(|p| (p.source, e.suite.clone())));
+            }
+        }
+        for stage in &self.stages {
+            let sources = match stage {
+                Stage::Networks(s) => self.train_config(s)?.sources,
+                Stage::SwitchRows(s) => s.pairs.clone(),
+                _ => continue,
+            };
+            for src in sources {
+                if let Some((_, suite)) = held_out.iter().find(|(h, _)| *h == src.mesh) {
+                    return Err(self.stage_error(
+                        stage.name(),
+                        format!(
+                            "{} is a pair of the validation suite {suite}: a recipe never trains on what selects it",
+                            src.mesh
+                        ),
+                    ));
+                }
+            }
         }
         Ok(())
     }
@@ -441,6 +478,12 @@ impl Recipe {
                     return Err(bad(
                         "hidden, epochs, max_iteration and min_iteration must be positive".into(),
                     ));
+                }
+                if s.last_iteration > 0 && s.last_iteration < s.min_iteration {
+                    return Err(bad(format!(
+                        "last_iteration {} < min_iteration {}: no rows",
+                        s.last_iteration, s.min_iteration
+                    )));
                 }
                 if s.late && s.min_iteration <= 1 {
                     return Err(bad(

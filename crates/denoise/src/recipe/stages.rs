@@ -149,6 +149,15 @@ fn rows_files(dir: &Path) -> Result<Vec<PathBuf>, DenoiseError> {
     Ok(files)
 }
 
+/// The rows of iterations up to `last`.
+fn rows_up_to(rows: Vec<f32>, last: usize) -> Vec<f32> {
+    rows.chunks_exact(ROW_LEN)
+        .filter(|r| r[normalnet_net::switch::ITERATION_FEATURE] <= last as f32)
+        .flatten()
+        .copied()
+        .collect()
+}
+
 #[derive(Serialize, Deserialize)]
 struct SwitchFile {
     switch: SwitchWeights,
@@ -168,7 +177,11 @@ pub(super) fn switch_fit(
     for r in &stage.rows {
         let i = recipe.index_of(r).expect("checked");
         for f in rows_files(&recipe.stage_dir(out, i))? {
-            rows.extend(read_rows(&f, stage.min_iteration).map_err(|e| fail(&e))?);
+            let mut r = read_rows(&f, stage.min_iteration).map_err(|e| fail(&e))?;
+            if stage.last_iteration > 0 {
+                r = rows_up_to(r, stage.last_iteration);
+            }
+            rows.extend(r);
         }
     }
     progress.message(&format!(
@@ -185,7 +198,7 @@ pub(super) fn switch_fit(
     };
     let (mut weights, report) = fit(&rows, &[0, 1, 2, 3], &params).map_err(|e| fail(&e))?;
     weights.notes = format!(
-        "{}{}fitted by recipe {} stage {:?} ({} hidden, {} epochs, seed {}, iteration clamp {}, iterations >= {}) on {} rows of {}; expected angle {:.3} deg in the last epoch (per candidate {:.3?}, per-row best {:.3})",
+        "{}{}fitted by recipe {} stage {:?} ({} hidden, {} epochs, seed {}, iteration clamp {}, iterations {}..{}) on {} rows of {}; expected angle {:.3} deg in the last epoch (per candidate {:.3?}, per-row best {:.3})",
         stage.notes,
         if stage.notes.is_empty() { "" } else { "; " },
         recipe.name,
@@ -195,6 +208,11 @@ pub(super) fn switch_fit(
         stage.seed,
         stage.max_iteration,
         stage.min_iteration,
+        if stage.last_iteration > 0 {
+            stage.last_iteration.to_string()
+        } else {
+            "".into()
+        },
         rows.len() / ROW_LEN,
         stage.rows.join(", "),
         report.epoch_loss.last().copied().unwrap_or(f64::NAN),

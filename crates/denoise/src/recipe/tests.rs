@@ -110,3 +110,51 @@ fn bad_recipes_are_refused_naming_the_stage() {
         .to_string();
     assert!(err.contains("no [[stage]]"), "{err}");
 }
+
+#[test]
+fn the_shipped_recipes_load() {
+    let recipes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/recipes");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/train");
+    if !data.is_dir() {
+        println!(
+            "SKIP: no training data at {} (the suites name it)",
+            data.display()
+        );
+        return;
+    }
+    for name in ["lite.toml", "smoke.toml"] {
+        let r = Recipe::load(&recipes.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(r.stages.iter().any(|s| s.kind() == "evaluate"), "{name}");
+        r.hash().unwrap();
+    }
+}
+
+#[test]
+fn a_recipe_never_trains_on_its_validation_pairs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("suite.toml"),
+        "groups = [\"g\"]\n[[pair]]\nname = \"p\"\nsource = \"shape:61\"\ngroups = [\"g\"]\nnoise = [{ level = 0.3, seed = 1 }]\n",
+    )
+    .unwrap();
+    let text = format!(
+        "{NETWORKS}
+[[stage]]
+kind = \"switch_rows\"
+name = \"rows\"
+networks = \"nets\"
+pairs = [{{ mesh = \"shape:61\", gaussian = [0.3] }}]
+
+[[stage]]
+kind = \"evaluate\"
+name = \"e\"
+suite = \"suite.toml\"
+"
+    );
+    let err = recipe_in(dir.path(), &text).unwrap_err().to_string();
+    assert!(
+        err.contains("stage \"rows\"")
+            && err.contains("shape:61 is a pair of the validation suite suite.toml"),
+        "{err}"
+    );
+}
