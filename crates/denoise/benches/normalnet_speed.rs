@@ -17,7 +17,7 @@ use normalnet_denoise::{Denoiser, Params};
 use normalnet_mesh::noise::{NoiseParams, add_noise};
 use normalnet_mesh::{Mesh, NoProgress, Topology, compare, read_mesh};
 use normalnet_net::bundle::network_for_iteration;
-use normalnet_net::inference::filtered_normals;
+use normalnet_net::pipeline::filtered_normals;
 use normalnet_net::{Bundle, NUM_OUTPUTS, Precision};
 use normalnet_voxel::Voxelizer;
 use serde_json::{Value, json};

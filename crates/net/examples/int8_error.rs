@@ -9,7 +9,7 @@
 //! Prints mean / 99th percentile / largest angle (degrees) per network.
 
 use normalnet_mesh::{NoProgress, Topology, read_mesh};
-use normalnet_net::inference::filtered_normals;
+use normalnet_net::pipeline::filtered_normals;
 use normalnet_net::{Bundle, Precision};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -11,7 +11,7 @@ use normalnet_mesh::geometry::mean_edge_length;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{NoProgress, Topology, compare, read_mesh};
 use normalnet_net::bundle::network_for_iteration;
-use normalnet_net::inference::filtered_normals;
+use normalnet_net::pipeline::filtered_normals;
 use std::time::Instant;
 
 fn percentile(v: &mut [f64], p: f64) -> f64 {

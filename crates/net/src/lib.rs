@@ -1,7 +1,7 @@
 //! NormalNet (Zhao et al. 2019; SPEC §5–8) without a deep-learning
 //! framework: the architecture and fresh weights ([`arch`]), weight files
 //! ([`weights_file`], safetensors), model bundles of six trained networks
-//! ([`bundle`]), the denoising pipeline ([`inference`]) and the iterative
+//! ([`bundle`]), the denoising pipeline ([`pipeline`]) and the iterative
 //! training scheme ([`training`]), all running on the CPU engine of
 //! `normalnet-cnn`.
 //!
@@ -23,10 +23,10 @@ pub mod error;
 pub mod export;
 #[cfg(feature = "burn")]
 pub mod import;
-pub mod inference;
 pub mod learner;
 #[cfg(feature = "burn")]
 pub mod model;
+pub mod pipeline;
 pub mod plot;
 #[cfg(feature = "burn")]
 pub mod step;
@@ -39,7 +39,7 @@ pub mod weights_file;
 pub use arch::{MU_GS, ModelConfig, NUM_OUTPUTS};
 pub use bundle::{Bundle, Manifest};
 pub use error::NetError;
-pub use inference::{DenoiseParams, StageTimes, denoise};
 #[cfg(feature = "burn")]
 pub use model::NormalNet;
 pub use normalnet_cnn::Precision;
+pub use pipeline::{DenoiseParams, StageTimes, denoise};

@@ -21,7 +21,7 @@ use normalnet_mesh::{Mesh, NoProgress, Topology, compare};
 
 use crate::NetError;
 use crate::bundle::{Bundle, network_for_iteration};
-use crate::inference::{filtered_normals, take_flat_means};
+use crate::pipeline::{filtered_normals, take_flat_means};
 use crate::switch::{
     self, ITERATION_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchState, SwitchWeights,
 };

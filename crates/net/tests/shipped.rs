@@ -9,7 +9,7 @@
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{NoProgress, NoiseParams, Topology, add_noise};
 use normalnet_net::Bundle;
-use normalnet_net::inference::filtered_normals;
+use normalnet_net::pipeline::filtered_normals;
 use normalnet_voxel::frame::{Mat3, mat_vec};
 use std::path::Path;
 

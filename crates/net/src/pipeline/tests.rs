@@ -1,0 +1,500 @@
+use super::*;
+use crate::ModelConfig;
+use normalnet_cnn::Cnn;
+use normalnet_mesh::geometry::face_normals;
+use normalnet_voxel::{VoxelParams, Voxelizer};
+use crate::bundle::{new_manifest, save_bundle};
+use normalnet_mesh::NoProgress;
+use normalnet_voxel::frame::{Mat3, mat_vec};
+
+fn shape() -> Mesh {
+    normalnet_voxel::shapes::generate_seeded(3, 400).unwrap()
+}
+
+fn transform(mesh: &Mesh, r: &Mat3, scale: f64, shift: Vec3) -> Mesh {
+    let p = mesh
+        .positions
+        .iter()
+        .map(|&x| vec3::add(vec3::scale(mat_vec(r, x), scale), shift))
+        .collect();
+    mesh.with_positions(p)
+}
+
+/// Rotation by `angle` about the unit `axis` (Rodrigues).
+fn rotation(axis: Vec3, angle: f64) -> Mat3 {
+    let [x, y, z] = vec3::normalize_or_zero(axis);
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+}
+
+fn engine(seed: u64) -> Cnn {
+    Cnn::new(&ModelConfig::tiny().init_weights(seed)).unwrap()
+}
+
+fn run(mesh: &Mesh, net: &Cnn, yaws: Option<&[f64]>) -> Vec<Vec3> {
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    filtered_normals(
+        mesh,
+        &topology,
+        net,
+        false,
+        VoxelParams::tiny(),
+        2,
+        64,
+        yaws,
+        &NoProgress,
+    )
+    .unwrap()
+    .0
+}
+
+fn angles_deg(a: &[Vec3], b: &[Vec3]) -> Vec<f64> {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| vec3::angle(*x, *y).to_degrees())
+        .collect()
+}
+
+#[test]
+fn outputs_are_unit_and_invariant_to_translation_and_scale() {
+    let net = engine(7);
+    let mesh = shape();
+    let a = run(&mesh, &net, None);
+    assert_eq!(a.len(), mesh.num_faces());
+    assert!(a.iter().all(|n| (vec3::norm(*n) - 1.0).abs() < 1e-9));
+    let moved = transform(&mesh, &IDENTITY, 3.5, [10.0, -4.0, 2.0]);
+    let b = run(&moved, &net, None);
+    let err = angles_deg(&a, &b);
+    let mean = err.iter().sum::<f64>() / err.len() as f64;
+    assert!(mean < 0.05, "mean change {mean}°");
+}
+
+/// A residual network whose output layer is zero predicts "no change":
+/// every filtered normal is the face's current normal; the same network
+/// read as a direct predictor gives no direction at all (fallback).
+#[test]
+fn a_zero_residual_is_the_identity() {
+    let config = ModelConfig::tiny();
+    let mut w = config.init_weights(4);
+    w.output.weight.fill(0.0);
+    w.output.bias.as_mut().unwrap().fill(0.0);
+    let mesh = shape();
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let pass = |w: &normalnet_cnn::NetWeights| {
+        let net = Cnn::new(w).unwrap();
+        let (normals, _) = filtered_normals(
+            &mesh,
+            &topology,
+            &net,
+            true,
+            VoxelParams::tiny(),
+            2,
+            64,
+            None,
+            &NoProgress,
+        )
+        .unwrap();
+        normals
+    };
+    let current = face_normals(&mesh);
+    let err = angles_deg(&pass(&w), &current);
+    assert!(
+        err.iter().all(|&e| e < 1e-4),
+        "max {:?}",
+        err.iter().cloned().fold(0.0, f64::max)
+    );
+    // a non-zero residual moves the normals
+    w.output.bias.as_mut().unwrap().fill(0.2);
+    let moved = pass(&w);
+    assert!(angles_deg(&moved, &current).iter().any(|&e| e > 5.0));
+}
+
+const IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// The frame aligns the 2-ring mean normal with y and leaves the yaw
+/// free, so rotating the mesh by R is exactly the same as keeping it and
+/// turning each face's grid by the yaw φ_f = yaw of `W'_f · R · W_fᵀ`.
+/// Outputs must then be the rotated outputs: this checks that the
+/// network outputs are rotated back with the right `W_rᵀ`. (An untrained
+/// network is not yaw-invariant, so without the yaws they would differ.)
+#[test]
+fn rotating_the_mesh_rotates_the_outputs_modulo_the_free_yaw() {
+    let net = engine(8);
+    let mesh = shape();
+    let r = rotation([0.3, -0.5, 0.8], 1.1);
+    let rotated = transform(&mesh, &r, 1.0, [0.0; 3]);
+    let topo = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let v = Voxelizer::new(&mesh, &topo, VoxelParams::tiny()).unwrap();
+    let vr = Voxelizer::new(&rotated, &topo, VoxelParams::tiny()).unwrap();
+    let yaws: Vec<f64> = (0..mesh.num_faces())
+        .map(|f| {
+            let w = v.frame(f, 0.0).rotation;
+            let wr = vr.frame(f, 0.0).rotation;
+            // M = W'_f R W_fᵀ, a rotation about y by φ: M[0][2] = sin φ, M[0][0] = cos φ
+            let m = |i: usize, j: usize| {
+                (0..3)
+                    .map(|a| (0..3).map(|b| wr[i][a] * r[a][b] * w[j][b]).sum::<f64>())
+                    .sum::<f64>()
+            };
+            assert!((m(1, 1) - 1.0).abs() < 1e-9, "not a yaw");
+            m(0, 2).atan2(m(0, 0))
+        })
+        .collect();
+    let base = run(&mesh, &net, Some(&yaws));
+    let expected: Vec<Vec3> = base.iter().map(|n| mat_vec(&r, *n)).collect();
+    let got = run(&rotated, &net, None);
+    let err = angles_deg(&expected, &got);
+    let mean = err.iter().sum::<f64>() / err.len() as f64;
+    assert!(mean < 0.05, "mean deviation {mean}°");
+    // and the yaw matters for an untrained network: without it the
+    // outputs are not simply rotated
+    let plain: Vec<Vec3> = run(&mesh, &net, None)
+        .iter()
+        .map(|n| mat_vec(&r, *n))
+        .collect();
+    let off = angles_deg(&plain, &got);
+    assert!(off.iter().sum::<f64>() / off.len() as f64 > 0.05);
+}
+
+/// A bundle of six freshly initialised tiny networks.
+fn tiny_bundle() -> Bundle {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = new_manifest("tiny").unwrap();
+    let nets: Vec<normalnet_cnn::NetWeights> = (0..6)
+        .map(|i| ModelConfig::tiny().init_weights(i))
+        .collect();
+    save_bundle(dir.path(), &manifest, &nets).unwrap();
+    Bundle::load(dir.path()).unwrap()
+}
+
+#[test]
+fn denoise_runs_every_interval_without_nan() {
+    let bundle = tiny_bundle();
+    let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let params = DenoiseParams {
+        iterations: 11,
+        vertex_iterations: 2,
+        batch: 50,
+        auto_stop_deg: 0.0,
+        freeze_deg: 0.0,
+        flat_skip_deg: 0.0,
+        reuse_move: 0.0,
+        ..DenoiseParams::default()
+    };
+    let (out, times) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();
+    assert_eq!(out.faces, mesh.faces);
+    assert!(out.positions.iter().flatten().all(|x| x.is_finite()));
+    assert_ne!(out.positions, mesh.positions);
+    assert_eq!(times.faces_processed, 11 * mesh.num_faces());
+    assert!(times.cnn_s > 0.0 && times.total_s >= times.cnn_s);
+    let bad = DenoiseParams {
+        iterations: 0,
+        ..DenoiseParams::default()
+    };
+    assert!(matches!(
+        denoise(&mesh, &bundle, &bad, &NoProgress),
+        Err(NetError::InvalidParameter {
+            name: "iterations",
+            ..
+        })
+    ));
+}
+
+#[test]
+fn unmoved_neighbourhoods_reuse_the_same_networks_output() {
+    let bundle = tiny_bundle();
+    let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let run = |reuse_move: f64| {
+        let params = DenoiseParams {
+            // network 4 serves iterations 4 and 5, network 5 iteration 6
+            iterations: 6,
+            vertex_iterations: 2,
+            batch: 50,
+            auto_stop_deg: 0.0,
+            freeze_deg: 0.0,
+            flat_skip_deg: 0.0,
+            reuse_move,
+            ..DenoiseParams::default()
+        };
+        denoise(&mesh, &bundle, &params, &NoProgress).unwrap()
+    };
+    let evaluated = |times: &StageTimes| -> Vec<usize> {
+        times.iterations.iter().map(|i| i.faces_evaluated).collect()
+    };
+    let n = mesh.num_faces();
+    let (exact, t_exact) = run(0.0);
+    assert_eq!(evaluated(&t_exact), vec![n; 6]);
+    // every vertex counts as unmoved: the same network's faces reuse
+    // their outputs, a new network evaluates every face
+    let (all, t_all) = run(180.0);
+    assert_eq!(evaluated(&t_all), vec![n, n, n, n, 0, n]);
+    assert!(all.positions.iter().flatten().all(|x| x.is_finite()));
+    assert_eq!(all.faces, exact.faces);
+    for bad in [-0.1, f64::NAN] {
+        let params = DenoiseParams {
+            reuse_move: bad,
+            ..DenoiseParams::default()
+        };
+        assert!(matches!(
+            denoise(&mesh, &bundle, &params, &NoProgress),
+            Err(NetError::InvalidParameter {
+                name: "reuse_move",
+                ..
+            })
+        ));
+    }
+}
+
+#[test]
+fn the_learned_switch_blends_candidates_and_is_optional() {
+    let mut bundle = tiny_bundle();
+    let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let run = |bundle: &Bundle, switch: bool| {
+        let params = DenoiseParams {
+            iterations: 2,
+            vertex_iterations: 3,
+            switch,
+            ..DenoiseParams::default()
+        };
+        denoise(&mesh, bundle, &params, &NoProgress)
+            .unwrap()
+            .0
+            .positions
+    };
+    let paper = run(&bundle, true);
+    // a switch that always takes the network's output is the paper's form
+    bundle.manifest.switch = Some(crate::switch::tests::constant(0));
+    let same = run(&bundle, true);
+    let largest = paper
+        .iter()
+        .zip(&same)
+        .map(|(a, b)| vec3::norm(vec3::sub(*a, *b)))
+        .fold(0.0, f64::max);
+    assert!(largest < 1e-9, "moved {largest}");
+    // switched off: exactly the paper's form
+    assert_eq!(run(&bundle, false), paper);
+    // always "stay": the vertices lie in their faces' planes and do not move
+    bundle.manifest.switch = Some(crate::switch::tests::constant(3));
+    let stay = run(&bundle, true);
+    let largest = mesh
+        .positions
+        .iter()
+        .zip(&stay)
+        .map(|(a, b)| vec3::norm(vec3::sub(*a, *b)))
+        .fold(0.0, f64::max);
+    assert!(largest < 1e-9, "moved {largest}");
+    // ... and the run stops after the first iteration: every face stayed
+    let params = DenoiseParams {
+        iterations: 5,
+        vertex_iterations: 3,
+        ..DenoiseParams::default()
+    };
+    let (_, times) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();
+    assert_eq!(times.iterations.len(), 1);
+    assert_eq!(times.iterations[0].stay_share, 1.0);
+    let fixed = DenoiseParams {
+        auto_stop_deg: 0.0,
+        ..params
+    };
+    let (_, times) = denoise(&mesh, &bundle, &fixed, &NoProgress).unwrap();
+    assert_eq!(times.iterations.len(), 5);
+    // always the guided pass: the guided form
+    bundle.manifest.switch = Some(crate::switch::tests::constant(1));
+    let guided = DenoiseParams {
+        iterations: 2,
+        vertex_iterations: 3,
+        guided_from: 1,
+        switch: false,
+        ..DenoiseParams::default()
+    };
+    let guided = denoise(&mesh, &bundle, &guided, &NoProgress).unwrap().0;
+    let largest = guided
+        .positions
+        .iter()
+        .zip(&run(&bundle, true))
+        .map(|(a, b)| vec3::norm(vec3::sub(*a, *b)))
+        .fold(0.0, f64::max);
+    assert!(largest < 1e-9, "moved {largest}");
+}
+
+#[test]
+fn the_flat_rule_chooses_between_the_guided_and_the_paper_form() {
+    let bundle = tiny_bundle();
+    let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let run = |guided_from: usize, flat_deg: f64| {
+        let params = DenoiseParams {
+            iterations: 2,
+            vertex_iterations: 2,
+            guided_from,
+            guided_flat_deg: flat_deg,
+            ..DenoiseParams::default()
+        };
+        denoise(&mesh, &bundle, &params, &NoProgress)
+            .unwrap()
+            .0
+            .positions
+    };
+    let paper = run(0, 0.0);
+    let guided = run(1, 0.0);
+    assert_ne!(paper, guided);
+    // every ring normal within 180°: every face flat, the guided form
+    assert_eq!(run(1, 180.0), guided);
+    // within 1e-9°: no face flat (random networks), the paper's form
+    assert_eq!(run(1, 1e-9), paper);
+}
+
+/// A strip of 8 × 4 squares (two triangles each) folded by 90° along
+/// x = 0: the half x ≤ 0 lies in the plane y = 0, the half x ≥ 0 in
+/// the plane x = 0.
+fn folded_strip() -> Mesh {
+    let mut positions = Vec::new();
+    for i in 0..=8 {
+        for j in 0..=4 {
+            let x = i as f64 - 4.0;
+            let z = j as f64;
+            positions.push(if x <= 0.0 { [x, 0.0, z] } else { [0.0, x, z] });
+        }
+    }
+    let v = |i: u32, j: u32| i * 5 + j;
+    let mut faces = Vec::new();
+    for i in 0..8 {
+        for j in 0..4 {
+            faces.push([v(i, j), v(i, j + 1), v(i + 1, j + 1)]);
+            faces.push([v(i, j), v(i + 1, j + 1), v(i + 1, j)]);
+        }
+    }
+    Mesh::new(positions, faces).unwrap()
+}
+
+#[test]
+fn flat_patches_are_the_faces_away_from_the_fold_and_skip_the_network() {
+    let mesh = folded_strip();
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let normals = face_normals(&mesh);
+    let flat = flat_patches(&mesh, &topology, 10.0);
+    // columns 0–1 and 6–7 lie two rings or more from the fold
+    for (f, got) in flat.iter().enumerate() {
+        let column = f / 8;
+        let far = !(2..6).contains(&column);
+        assert_eq!(got.is_some(), far, "face {f} (column {column})");
+        if let Some(mean) = got {
+            assert!(vec3::angle(*mean, normals[f]) < 1e-9, "face {f}");
+        }
+    }
+    // the fold's two normals are 90° apart: the 2-ring mean lies less
+    // than 90° from each (at least 1 of 40 faces on the other side: 88.6°
+    // at most), so a limit of 89.5° takes in every face
+    assert!(
+        flat_patches(&mesh, &topology, 89.5)
+            .iter()
+            .all(|m| m.is_some())
+    );
+
+    // with a switch that keeps every face where it is, the mesh does not
+    // move, and from the second iteration on the flat faces skip the network
+    let mut bundle = tiny_bundle();
+    bundle.manifest.switch = Some(crate::switch::tests::constant(3));
+    let run = |flat_skip_deg: f64| {
+        let params = DenoiseParams {
+            iterations: 3,
+            vertex_iterations: 2,
+            freeze_deg: 0.0,
+            auto_stop_deg: 0.0,
+            flat_skip_deg,
+            ..DenoiseParams::default()
+        };
+        denoise(&mesh, &bundle, &params, &NoProgress).unwrap().1
+    };
+    let evaluated =
+        |t: StageTimes| -> Vec<usize> { t.iterations.iter().map(|s| s.faces_evaluated).collect() };
+    let n = mesh.num_faces();
+    let skipped = flat.iter().filter(|m| m.is_some()).count();
+    assert_eq!(skipped, 32);
+    assert_eq!(evaluated(run(0.0)), [n, n, n]);
+    assert_eq!(evaluated(run(10.0)), [n, n - skipped, n - skipped]);
+    // every face flat: the network runs once, and the turn from its
+    // outputs to the 2-ring means counts in the mean change (which the
+    // paper form's auto stop reads); then the means stay
+    let t = run(89.5);
+    let changes: Vec<f64> = t.iterations.iter().map(|s| s.mean_change_deg).collect();
+    assert_eq!(evaluated(t), [n, 0, 0]);
+    assert!(changes[1] > 1.0, "{changes:?}");
+    assert!(changes[2] < 1e-6, "{changes:?}");
+    let bad = DenoiseParams {
+        flat_skip_deg: f64::NAN,
+        ..DenoiseParams::default()
+    };
+    assert!(matches!(
+        bad.validate(),
+        Err(NetError::InvalidParameter {
+            name: "flat_skip_deg",
+            ..
+        })
+    ));
+}
+
+#[test]
+fn frozen_faces_keep_their_output_and_auto_stop_ends_the_run() {
+    let bundle = tiny_bundle();
+    let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let n = mesh.num_faces();
+    let run = |iterations: usize, freeze_deg: f64, auto_stop_deg: f64| {
+        let params = DenoiseParams {
+            iterations,
+            vertex_iterations: 2,
+            freeze_deg,
+            auto_stop_deg,
+            flat_skip_deg: 0.0,
+            ..DenoiseParams::default()
+        };
+        denoise(&mesh, &bundle, &params, &NoProgress).unwrap()
+    };
+    // off: every face every iteration, the mean change is reported
+    let (exact, t) = run(4, 0.0, 0.0);
+    assert_eq!(t.iterations.len(), 4);
+    assert!(t.iterations.iter().all(|s| s.faces_evaluated == n));
+    assert_eq!(t.iterations[0].mean_change_deg, 0.0);
+    assert!(t.iterations[1..].iter().all(|s| s.mean_change_deg > 0.0));
+    assert_eq!(
+        t.iterations.iter().map(|s| s.network).collect::<Vec<_>>(),
+        [1, 2, 3, 4]
+    );
+    // a threshold no face meets changes nothing
+    assert_eq!(run(4, 1e-12, 0.0).0.positions, exact.positions);
+    // every face turns less than 180°: all freeze after iteration 2, and
+    // iterations 3 and 4 move the vertices towards iteration 2's normals
+    let (frozen, t) = run(4, 180.0, 0.0);
+    assert_eq!(
+        t.iterations
+            .iter()
+            .map(|s| s.faces_evaluated)
+            .collect::<Vec<_>>(),
+        [n, n, 0, 0]
+    );
+    assert_eq!(t.faces_processed, 2 * n);
+    assert_eq!(t.iterations[2].mean_change_deg, 0.0);
+    assert_ne!(frozen.positions, exact.positions);
+    // and the frozen run is deterministic
+    assert_eq!(run(4, 180.0, 0.0).0.positions, frozen.positions);
+    // auto stop: any change is below 180°, so the run ends after 2
+    let (stopped, t) = run(10, 0.0, 180.0);
+    assert_eq!(t.iterations.len(), 2);
+    assert_eq!(stopped.positions, run(2, 0.0, 0.0).0.positions);
+    // bad thresholds are refused, naming the field
+    for (f, a, name) in [(-1.0, 0.0, "freeze_deg"), (0.0, f64::NAN, "auto_stop_deg")] {
+        let params = DenoiseParams {
+            freeze_deg: f,
+            auto_stop_deg: a,
+            ..DenoiseParams::default()
+        };
+        assert!(matches!(
+            params.validate(),
+            Err(NetError::InvalidParameter { name: n, .. }) if n == name
+        ));
+    }
+}
