@@ -59,7 +59,7 @@ pub fn denoise(
     let mut chooser = Chooser::new(form, mesh, &topology, params.mu_g);
     let mut skips = Skips::new(mesh, &topology, params);
     let mut positions = mesh.positions.clone();
-    let mut buffers = VertexUpdateBuffers::default();
+    let mut updater = Updater::new(mesh, params);
     let mut times = StageTimes::default();
     let mut previous: Option<Vec<Vec3>> = None;
     progress.start("NormalNet", (params.iterations * n) as u64);
@@ -80,23 +80,7 @@ pub fn denoise(
         previous = Some(normals.clone());
         let t = Instant::now();
         let choice = chooser.choose(k, &current, &topology, normals, &selection);
-        let before = skips.tracks_moves().then(|| positions.clone());
-        let update = VertexUpdate {
-            iterations: params.vertex_iterations,
-            fixed: None,
-            fold_guard: params.fold_guard,
-        };
-        vertex_update_with(
-            &mut positions,
-            &mesh.faces,
-            &topology,
-            &choice.normals,
-            &update,
-            &mut buffers,
-        );
-        if let Some(before) = before {
-            skips.moved(&before, &positions);
-        }
+        updater.run(&mut positions, &topology, &choice.normals, &mut skips);
         times.vertex_update_s += t.elapsed().as_secs_f64();
         times.iterations.push(IterationStats {
             network: i + 1,
@@ -112,6 +96,52 @@ pub fn denoise(
     progress.finish();
     times.total_s = start.elapsed().as_secs_f64();
     Ok((mesh.with_positions(positions), times))
+}
+
+/// The update stage: N_v vertex updates towards the filtered normals, with
+/// the fold guard (SPEC §4).
+struct Updater<'m> {
+    faces: &'m [[u32; 3]],
+    update: VertexUpdate<'m>,
+    buffers: VertexUpdateBuffers,
+}
+
+impl<'m> Updater<'m> {
+    fn new(mesh: &'m Mesh, params: &DenoiseParams) -> Updater<'m> {
+        let update = VertexUpdate {
+            iterations: params.vertex_iterations,
+            fixed: None,
+            fold_guard: params.fold_guard,
+        };
+        Updater {
+            faces: &mesh.faces,
+            update,
+            buffers: VertexUpdateBuffers::default(),
+        }
+    }
+
+    /// Moves `positions` towards `normals`; the skips learn how far the
+    /// vertices moved.
+    fn run(
+        &mut self,
+        positions: &mut Vec<Vec3>,
+        topology: &Topology,
+        normals: &[Vec3],
+        skips: &mut Skips,
+    ) {
+        let before = skips.tracks_moves().then(|| positions.clone());
+        vertex_update_with(
+            positions,
+            self.faces,
+            topology,
+            normals,
+            &self.update,
+            &mut self.buffers,
+        );
+        if let Some(before) = before {
+            skips.moved(&before, positions);
+        }
+    }
 }
 
 /// Per face the angle in degrees between two iterations' filtered normals

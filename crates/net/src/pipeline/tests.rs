@@ -1,11 +1,11 @@
 use super::*;
 use crate::ModelConfig;
-use normalnet_cnn::Cnn;
-use normalnet_mesh::geometry::face_normals;
-use normalnet_voxel::{VoxelParams, Voxelizer};
 use crate::bundle::{new_manifest, save_bundle};
+use normalnet_cnn::Cnn;
 use normalnet_mesh::NoProgress;
+use normalnet_mesh::geometry::face_normals;
 use normalnet_voxel::frame::{Mat3, mat_vec};
+use normalnet_voxel::{VoxelParams, Voxelizer};
 
 fn shape() -> Mesh {
     normalnet_voxel::shapes::generate_seeded(3, 400).unwrap()
