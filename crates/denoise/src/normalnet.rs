@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use normalnet_filters::{FOLD_GUARD_COS, GnfParams};
+use normalnet_filters::GnfParams;
 use normalnet_mesh::outliers::denoise_around;
 use normalnet_mesh::{Mesh, Progress};
 use normalnet_net::{Bundle, DenoiseParams, Precision};
@@ -46,60 +46,31 @@ pub const INFO: MethodInfo = MethodInfo {
     build,
 };
 
-/// NormalNet's parameters; `Default` is SPEC §7.
+/// NormalNet's parameters; `Default` is SPEC §7. The pipeline's settings
+/// are [`DenoiseParams`]'s fields (flattened: one key each, written and
+/// documented once, in `normalnet_net::pipeline::params`); around them the
+/// bundle, the GNF passes after it and the arithmetic.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct NormalnetParams {
     /// model bundle folder; none: `$NORMALNET_MODEL`, else the built-in one
     pub model: Option<PathBuf>,
-    /// N_f, filtering iterations (10)
-    pub iterations: usize,
-    /// N_v, vertex-update passes per iteration (20)
-    pub vertex_iterations: usize,
-    /// μ_g; the nearest of the bundle's six outputs is used (0.35)
-    pub mu_g: f64,
-    /// from this iteration on, the network's normals guide a joint-bilateral
-    /// pass instead of being the filtered normals (0 = never: the paper's form)
-    pub guided_from: usize,
-    /// with the guided form: faces whose guided normal turns more than this
-    /// many degrees from the network's keep the network's (0 = no limit)
-    pub guided_max_turn_deg: f64,
-    /// with the guided form: only where the network's 1-ring normals are
-    /// flat (this fraction within this angle); 0 = everywhere
-    pub guided_flat_deg: f64,
-    /// see `guided_flat_deg` (0.5)
-    pub guided_flat_frac: f64,
+    /// the pipeline (iterations, μ_g, form, skips, stop rule, fold guard)
+    #[serde(flatten)]
+    pub pipeline: DenoiseParams,
     /// GNF normal passes (reference settings but μ_g = `mu_g`, 10 vertex
     /// passes each) run on NormalNet's result (0 = none, the paper's form)
     pub gnf_after: usize,
-    /// the fold guard of the vertex update (on)
-    pub fold_guard: bool,
-    /// the guard's cone: cos of the largest turn of a face away from its
-    /// filtered normal (0.5 = 60°; 0 refuses only flips)
-    pub fold_guard_cos: f64,
-    /// converged faces stop being filtered: a face whose network output
-    /// turned less than this many degrees between two iterations keeps it
-    /// (0 = off: every face every iteration)
-    pub freeze_deg: f64,
-    /// flat patches skip the network: from iteration 2 on, a face whose
-    /// 2-ring normals all lie within this many degrees of their mean takes
-    /// that mean as its network output (0 = off; see
-    /// `DenoiseParams::flat_skip_deg`)
-    pub flat_skip_deg: f64,
-    /// unmoved neighbourhoods reuse their output: a face the same network
-    /// evaluated before, around which no vertex moved more than this
-    /// fraction of the mean edge length since, keeps that output (0 = off;
-    /// see `DenoiseParams::reuse_move`)
-    pub reuse_move: f64,
-    /// stop after an iteration whose outputs turned less than this many
-    /// degrees on average (`iterations` is then the most; 0 = off: the
-    /// paper's pipeline; default 1.0, see `DenoiseParams::auto_stop_deg`)
-    pub auto_stop_deg: f64,
-    /// the bundle's learned switch between the network's output, the
-    /// guided pass, a GNF pass and the current normal, per face (on; false
-    /// or a bundle without one: the paper's form; see
-    /// `normalnet_net::switch`)
-    pub switch: bool,
+    /// the arithmetic of the networks
+    #[serde(flatten)]
+    pub arithmetic: Arithmetic,
+}
+
+/// The arithmetic of the networks (keys `int8`, `int8_stem`,
+/// `int8_shortcut`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Arithmetic {
     /// the residual blocks' 3³ convolutions in 8-bit integers where the CPU
     /// has AVX2 or AVX-512 VNNI (`normalnet_cnn::Precision::Int8`); false, or a CPU
     /// without it: f32
@@ -115,26 +86,9 @@ pub struct NormalnetParams {
     pub int8_shortcut: bool,
 }
 
-impl Default for NormalnetParams {
+impl Default for Arithmetic {
     fn default() -> Self {
-        let d = DenoiseParams::default();
-        NormalnetParams {
-            model: None,
-            iterations: d.iterations,
-            vertex_iterations: d.vertex_iterations,
-            mu_g: d.mu_g,
-            guided_from: d.guided_from,
-            guided_max_turn_deg: d.guided_max_turn_deg,
-            guided_flat_deg: d.guided_flat_deg,
-            guided_flat_frac: d.guided_flat_frac,
-            gnf_after: 0,
-            fold_guard: d.fold_guard.is_some(),
-            fold_guard_cos: d.fold_guard.unwrap_or(FOLD_GUARD_COS),
-            freeze_deg: d.freeze_deg,
-            flat_skip_deg: d.flat_skip_deg,
-            reuse_move: d.reuse_move,
-            auto_stop_deg: d.auto_stop_deg,
-            switch: d.switch,
+        Arithmetic {
             int8: INT8_DEFAULT,
             int8_stem: INT8_DEFAULT,
             int8_shortcut: INT8_SHORTCUT_DEFAULT,
@@ -142,34 +96,25 @@ impl Default for NormalnetParams {
     }
 }
 
-impl NormalnetParams {
-    /// The pipeline's settings.
-    pub fn pipeline(&self) -> DenoiseParams {
-        DenoiseParams {
-            iterations: self.iterations,
-            vertex_iterations: self.vertex_iterations,
-            mu_g: self.mu_g,
-            guided_from: self.guided_from,
-            guided_max_turn_deg: self.guided_max_turn_deg,
-            guided_flat_deg: self.guided_flat_deg,
-            guided_flat_frac: self.guided_flat_frac,
-            fold_guard: self.fold_guard.then_some(self.fold_guard_cos),
-            freeze_deg: self.freeze_deg,
-            flat_skip_deg: self.flat_skip_deg,
-            reuse_move: self.reuse_move,
-            auto_stop_deg: self.auto_stop_deg,
-            switch: self.switch,
-            ..DenoiseParams::default()
+impl Default for NormalnetParams {
+    fn default() -> Self {
+        NormalnetParams {
+            model: None,
+            pipeline: DenoiseParams::default(),
+            gnf_after: 0,
+            arithmetic: Arithmetic::default(),
         }
     }
+}
 
+impl NormalnetParams {
     /// Checks the ranges (before any bundle is loaded).
     pub fn check(&self) -> Result<(), DenoiseError> {
         let bad = |message: String| DenoiseError::Parameter {
             method: INFO.name,
             message,
         };
-        if self.vertex_iterations == 0 {
+        if self.pipeline.vertex_iterations == 0 {
             return Err(bad(
                 "vertex_iterations = 0 would run the whole network and return the input unchanged \
                  (NormalNet moves vertices only in its vertex-update passes); give at least 1 \
@@ -177,13 +122,7 @@ impl NormalnetParams {
                     .into(),
             ));
         }
-        if !(-1.0..=1.0).contains(&self.fold_guard_cos) {
-            return Err(bad(format!(
-                "fold_guard_cos = {} must lie in [-1, 1]",
-                self.fold_guard_cos
-            )));
-        }
-        self.pipeline().validate().map_err(|e| bad(e.to_string()))
+        self.pipeline.validate().map_err(|e| bad(e.to_string()))
     }
 
     /// The bundle folder to load; `None`: the built-in bundle.
@@ -221,13 +160,14 @@ fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseE
     let params: NormalnetParams = resolve(name, given)?;
     params.check()?;
     let mut bundle = params.load_bundle()?;
-    let precision = bundle.set_precision(if params.int8 {
+    let arithmetic = params.arithmetic;
+    let precision = bundle.set_precision(if arithmetic.int8 {
         Precision::Int8
     } else {
         Precision::F32
     });
-    let int8_stem = bundle.set_int8_stem(params.int8_stem);
-    let int8_shortcut = bundle.set_int8_shortcut(params.int8_shortcut);
+    let int8_stem = bundle.set_int8_stem(arithmetic.int8_stem);
+    let int8_shortcut = bundle.set_int8_shortcut(arithmetic.int8_shortcut);
     Ok(Box::new(NormalNet {
         params,
         bundle,
@@ -257,18 +197,18 @@ impl Method for NormalNet {
         _gt: Option<&Mesh>,
         progress: &dyn Progress,
     ) -> Result<Outcome, DenoiseError> {
-        let params = self.params.pipeline();
+        let params = &self.params.pipeline;
         let mut stages = None;
         let mesh = denoise_around(mesh, |m| {
-            let (out, times) = normalnet_net::denoise(m, &self.bundle, &params, progress)?;
+            let (out, times) = normalnet_net::denoise(m, &self.bundle, params, progress)?;
             stages = Some(times);
             if self.params.gnf_after == 0 {
                 return Ok::<_, DenoiseError>(out);
             }
             let gnf = GnfParams {
-                mu_g: self.params.mu_g,
+                mu_g: params.mu_g,
                 normal_iterations: self.params.gnf_after,
-                fold_guard: self.params.fold_guard,
+                fold_guard: params.fold_guard,
                 ..GnfParams::default()
             };
             Ok(normalnet_filters::gnf(&out, &gnf, progress)?)

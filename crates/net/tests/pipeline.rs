@@ -238,7 +238,7 @@ fn a_run_continues_a_bundle_and_counts_its_samples() {
             iterations: 2,
             vertex_iterations: 5,
             guided_from,
-            fold_guard: Some(normalnet_filters::FOLD_GUARD_COS),
+            fold_guard: true,
             ..DenoiseParams::default()
         };
         let (out, _) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();

@@ -95,7 +95,7 @@ fn the_fold_guard_folds_no_more_faces_on_the_example() {
             iterations: 4,
             auto_stop_deg: 0.0,
             switch: false,
-            fold_guard: fold_guard.then_some(normalnet_filters::FOLD_GUARD_COS),
+            fold_guard,
             ..normalnet_net::DenoiseParams::default()
         };
         let (out, _) = normalnet_net::denoise(&noisy, &bundle, &params, &NoProgress).unwrap();

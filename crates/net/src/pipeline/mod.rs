@@ -111,7 +111,7 @@ impl<'m> Updater<'m> {
         let update = VertexUpdate {
             iterations: params.vertex_iterations,
             fixed: None,
-            fold_guard: params.fold_guard,
+            fold_guard: params.fold_guard_cone(),
         };
         Updater {
             faces: &mesh.faces,

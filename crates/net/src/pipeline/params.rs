@@ -3,6 +3,7 @@
 //! where two settings interact, the choice says which one wins.
 
 use normalnet_filters::FOLD_GUARD_COS;
+use serde::{Deserialize, Serialize};
 
 use crate::NetError;
 use crate::bundle::Bundle;
@@ -12,7 +13,12 @@ use crate::switch::{self, SwitchWeights};
 /// them through typed views: [`Form::of`] (how the filtered normal is
 /// chosen), [`StopRule::of`] (when the run ends), and the skips
 /// (`freeze_deg`, `flat_skip_deg`, `reuse_move`; [`super::skips`]).
-#[derive(Clone, Debug, PartialEq)]
+///
+/// The keys are the user's: the registry's `normalnet` parameters are these
+/// fields (flattened into `normalnet_denoise::normalnet::NormalnetParams`),
+/// so a new pipeline option is one field here with its doc and default.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct DenoiseParams {
     /// N_f, filtering iterations (default 10)
     pub iterations: usize,
@@ -20,7 +26,8 @@ pub struct DenoiseParams {
     pub vertex_iterations: usize,
     /// μ_g; the nearest of the bundle's six outputs is used (default 0.35)
     pub mu_g: f64,
-    /// faces per network batch (default 256)
+    /// faces per network batch (default 256; key `network_batch`)
+    #[serde(rename = "network_batch")]
     pub batch: usize,
     /// Guided form from this filtering iteration on (1-based; 0 = never,
     /// the paper's form throughout): the network's normals are the guidance
@@ -43,10 +50,13 @@ pub struct DenoiseParams {
     /// see `guided_flat_deg` (default 0.5)
     pub guided_flat_frac: f64,
     /// the fold guard of the shared vertex update
-    /// (`normalnet_filters::vertex_update`): `Some(cos)` keeps a face within
-    /// `acos(cos)` of its filtered normal (default [`FOLD_GUARD_COS`], 60°;
-    /// `Some(0.0)` refuses only the flip itself), `None` switches it off
-    pub fold_guard: Option<f64>,
+    /// (`normalnet_filters::vertex_update`): keeps a face within
+    /// `acos(fold_guard_cos)` of its filtered normal (default on)
+    pub fold_guard: bool,
+    /// the guard's cone: cos of the largest turn of a face away from its
+    /// filtered normal (default [`FOLD_GUARD_COS`] = 0.5, 60°; 0 refuses
+    /// only the flip itself)
+    pub fold_guard_cos: f64,
     /// Converged faces stop being filtered: a face whose network output
     /// turned less than this many degrees between two consecutive
     /// iterations keeps that output for the rest of the run and is no
@@ -97,7 +107,8 @@ impl Default for DenoiseParams {
             guided_max_turn_deg: 0.0,
             guided_flat_deg: 0.0,
             guided_flat_frac: 0.5,
-            fold_guard: Some(FOLD_GUARD_COS),
+            fold_guard: true,
+            fold_guard_cos: FOLD_GUARD_COS,
             freeze_deg: FREEZE_DEG,
             flat_skip_deg: FLAT_SKIP_DEG,
             reuse_move: REUSE_MOVE,
@@ -108,6 +119,11 @@ impl Default for DenoiseParams {
 }
 
 impl DenoiseParams {
+    /// The fold guard as the vertex update takes it: `Some(cos)` when on.
+    pub fn fold_guard_cone(&self) -> Option<f64> {
+        self.fold_guard.then_some(self.fold_guard_cos)
+    }
+
     /// Checks the ranges; the error names the field.
     pub fn validate(&self) -> Result<(), NetError> {
         if self.iterations == 0 {
@@ -120,6 +136,12 @@ impl DenoiseParams {
             return Err(NetError::InvalidParameter {
                 name: "mu_g",
                 message: format!("μ_g = {} must be finite and positive", self.mu_g),
+            });
+        }
+        if !(-1.0..=1.0).contains(&self.fold_guard_cos) {
+            return Err(NetError::InvalidParameter {
+                name: "fold_guard_cos",
+                message: format!("{} must lie in [-1, 1]", self.fold_guard_cos),
             });
         }
         if self.batch == 0 {
