@@ -50,7 +50,7 @@ pub const INFO: MethodInfo = MethodInfo {
 /// are [`DenoiseParams`]'s fields (flattened: one key each, written and
 /// documented once, in `normalnet_net::pipeline::params`); around them the
 /// bundle, the GNF passes after it and the arithmetic.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct NormalnetParams {
     /// model bundle folder; none: `$NORMALNET_MODEL`, else the built-in one
@@ -92,17 +92,6 @@ impl Default for Arithmetic {
             int8: INT8_DEFAULT,
             int8_stem: INT8_DEFAULT,
             int8_shortcut: INT8_SHORTCUT_DEFAULT,
-        }
-    }
-}
-
-impl Default for NormalnetParams {
-    fn default() -> Self {
-        NormalnetParams {
-            model: None,
-            pipeline: DenoiseParams::default(),
-            gnf_after: 0,
-            arithmetic: Arithmetic::default(),
         }
     }
 }
