@@ -28,6 +28,7 @@
 //!   the mesh, the link stays) and a read-only output file is refused.
 
 pub mod attributes;
+mod gltf;
 mod obj;
 mod off;
 mod ply;
@@ -56,6 +57,11 @@ pub enum Format {
     Ply,
     /// STL, ASCII or binary (detected from the content); written as binary.
     Stl,
+    /// glTF 2.0 as JSON (`.gltf`; buffers in `data:` URIs or files beside
+    /// it). A GLB file is read whatever its extension (told by content).
+    Gltf,
+    /// glTF 2.0 binary (`.glb`: JSON chunk and BIN chunk).
+    Glb,
 }
 
 impl Format {
@@ -67,21 +73,33 @@ impl Format {
             "off" => Some(Format::Off),
             "ply" => Some(Format::Ply),
             "stl" => Some(Format::Stl),
+            "gltf" => Some(Format::Gltf),
+            "glb" => Some(Format::Glb),
             _ => None,
         }
     }
 
-    /// The format's usual name in text: `OBJ`, `OFF`, `PLY`, `STL`.
+    /// The format's usual name in text: `OBJ`, `OFF`, `PLY`, `STL`,
+    /// `glTF`, `GLB`.
     pub fn name(self) -> &'static str {
         match self {
             Format::Obj => "OBJ",
             Format::Off => "OFF",
             Format::Ply => "PLY",
             Format::Stl => "STL",
+            Format::Gltf => "glTF",
+            Format::Glb => "GLB",
         }
     }
 
-    /// Parses a format name (`obj`, `off`, `ply`, `stl`; case-insensitive).
+    /// Whether this is one of the two containers of glTF 2.0 (`.gltf`,
+    /// `.glb`), between which the attribute writers convert.
+    pub fn is_gltf(self) -> bool {
+        matches!(self, Format::Gltf | Format::Glb)
+    }
+
+    /// Parses a format name (`obj`, `off`, `ply`, `stl`, `gltf`, `glb`;
+    /// case-insensitive).
     pub fn from_name(name: &str) -> Option<Format> {
         Format::from_path(Path::new(&format!("x.{name}")))
     }
@@ -120,14 +138,26 @@ pub fn read_mesh_as(path: impl AsRef<Path>, format: Format) -> Result<Mesh, Mesh
         path: path.to_path_buf(),
         source,
     })?;
-    parse_mesh(&bytes, format, path)
+    parse_mesh_in(&bytes, format, path, Some(&target_dir(path)))
 }
 
-/// Parses a mesh from memory; `path` is only used in error messages.
+/// Parses a mesh from memory; `path` is only used in error messages (a
+/// `.gltf` whose buffers are files is refused: [`read_mesh`] reads them).
 ///
 /// # Errors
 /// As [`read_mesh`].
 pub fn parse_mesh(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh, MeshError> {
+    parse_mesh_in(bytes, format, path, None)
+}
+
+/// [`parse_mesh`]; `dir` is the folder a `.gltf`'s buffer files are read
+/// from (`None`: refused).
+fn parse_mesh_in(
+    bytes: &[u8],
+    format: Format,
+    path: &Path,
+    dir: Option<&Path>,
+) -> Result<Mesh, MeshError> {
     let (positions, faces) = match format {
         Format::Obj => obj::parse(strip_bom(bytes), path)?,
         Format::Off => off::parse(strip_bom(bytes), path)?,
@@ -135,6 +165,7 @@ pub fn parse_mesh(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh, Mes
         // A binary STL header is 80 arbitrary bytes: the reader strips the
         // mark only once it knows the file is text.
         Format::Stl => stl::parse(bytes, path)?,
+        Format::Gltf | Format::Glb => gltf::parse(bytes, path, dir)?,
     };
     finish(positions, faces, path)
 }
@@ -193,12 +224,14 @@ fn write_format(
         Format::Off => off::write(w, mesh),
         Format::Ply => ply::write(w, mesh, options.ply_ascii),
         Format::Stl => stl::write(w, mesh),
+        Format::Gltf => gltf::write(w, mesh, gltf::GltfContainer::Json),
+        Format::Glb => gltf::write(w, mesh, gltf::GltfContainer::Binary),
     }
 }
 
-/// Checks, before any work, that `format` can hold `mesh`: STL stores f32,
-/// so every coordinate must lie within its range (the text formats and PLY
-/// hold any f64). `path` is the output, named in the error.
+/// Checks, before any work, that `format` can hold `mesh`: STL and glTF
+/// store f32, so every coordinate must lie within its range (the text
+/// formats and PLY hold any f64). `path` is the output, named in the error.
 ///
 /// # Errors
 /// [`MeshError::Io`] (`InvalidData`) naming `path` and the first vertex out
@@ -206,6 +239,7 @@ fn write_format(
 pub fn check_encodable(path: &Path, mesh: &Mesh, format: Format) -> Result<(), MeshError> {
     match format {
         Format::Stl => stl::check_range(mesh),
+        Format::Gltf | Format::Glb => gltf::check_range(mesh),
         Format::Obj | Format::Off | Format::Ply => Ok(()),
     }
     .map_err(|source| MeshError::Io {
@@ -217,7 +251,8 @@ pub fn check_encodable(path: &Path, mesh: &Mesh, format: Format) -> Result<(), M
 /// Encodes a mesh into memory (what [`write_mesh_as`] would write).
 ///
 /// # Errors
-/// A mesh the format cannot hold (STL: a coordinate beyond f32's range).
+/// A mesh the format cannot hold (STL, glTF: a coordinate beyond f32's
+/// range).
 pub fn encode_mesh(
     mesh: &Mesh,
     format: Format,
