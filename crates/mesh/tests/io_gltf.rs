@@ -791,6 +791,12 @@ fn broken_files_are_refused_naming_the_file_and_the_element() {
         Format::Glb,
         "nodes[0] is reached twice",
     );
+    // found by fuzzing: a world position beyond f32, which no glTF holds
+    refused(
+        &with(&|d| d["nodes"][0]["translation"] = json!([1e39, 0.0, 0.0])),
+        Format::Glb,
+        "element 0 lies at",
+    );
     refused(
         &with(&|d| d["asset"]["version"] = json!("1.0")),
         Format::Glb,

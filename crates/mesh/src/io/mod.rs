@@ -1,16 +1,21 @@
-//! Mesh file I/O (SPEC §1): OBJ, OFF, PLY (ASCII and binary) and STL (ASCII
-//! and binary) readers, OBJ/OFF/PLY/STL writers.
+//! Mesh file I/O (SPEC §1): OBJ, OFF, PLY (ASCII and binary), STL (ASCII
+//! and binary) and glTF 2.0 (`.gltf` and `.glb`) readers and writers.
 //!
 //! Policy, identical for every format:
 //! - vertex order and face order of the file are kept; polygons are
 //!   fan-triangulated `(v0, v_i, v_{i+1})` in file order, so the error metrics
-//!   can compare meshes face by face;
+//!   can compare meshes face by face. glTF is the exception by nature: its
+//!   mesh is every triangle primitive of the scene in world space (node
+//!   transforms applied), the primitives' vertices welded by exactly equal
+//!   world positions in order of first appearance, their triangles in
+//!   order ([`attributes`] and the glTF module say how it is written back);
 //! - [`read_mesh`] reads past attributes other than positions and face
 //!   indices (texture coordinates, normals, colours, extra PLY properties,
 //!   groups, materials) and [`write_mesh`] writes positions and triangles
 //!   only; [`read_mesh_file`] / [`write_mesh_file`] keep them
 //!   ([`attributes`] says what each format keeps);
-//! - only STL, which has no shared vertices, merges bit-identical coincident
+//! - only STL, which has no shared vertices, and glTF, whose primitives
+//!   split at material and UV seams, merge bit-identical coincident
 //!   vertices (in order of first appearance);
 //! - any defect (truncated file, bad index, non-finite coordinate, wrong
 //!   element count, empty file, a line that is no statement of the format)
@@ -21,8 +26,10 @@
 //!   keywords are matched case-insensitively where writers are known to vary
 //!   (OBJ `v`/`f`, the OFF header, every ASCII STL keyword);
 //! - writers print coordinates in the shortest decimal form that reads back
-//!   to the same `f64` (text formats), or the exact bits (binary PLY); STL is
-//!   f32 by definition. Output is written to a temporary file in the target
+//!   to the same `f64` (text formats), or the exact bits (binary PLY); STL and
+//!   glTF are f32 by definition (a glTF of another format's mesh: one node,
+//!   one primitive, u32 indices, its buffer a `data:` URI or the GLB BIN
+//!   chunk). Output is written to a temporary file in the target
 //!   directory and renamed into place, so a crash never leaves half a mesh;
 //!   an output that is a symbolic link is written through (its target gets
 //!   the mesh, the link stays) and a read-only output file is refused.

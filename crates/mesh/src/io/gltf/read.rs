@@ -472,6 +472,14 @@ impl Gather<'_> {
                 ));
             }
             let p = world.apply(local.map(f64::from));
+            // a mesh of glTF is one of f32 coordinates, in world space too
+            // (what the plain writer stores)
+            if !p.iter().all(|x| (*x as f32).is_finite()) {
+                return Err(format!(
+                    "accessors[{accessor}] (POSITION of {what}) element {i} lies at {p:?} in \
+                     world space, beyond the range of glTF's 32-bit floats"
+                ));
+            }
             let key = p.map(|x| if x == 0.0 { 0u64 } else { x.to_bits() });
             let next = self.positions.len();
             if next >= u32::MAX as usize {
