@@ -1,7 +1,8 @@
 //! The property every reader target checks: parsing arbitrary bytes returns
 //! `Ok` or `Err` without panicking, and a mesh it accepts survives a write →
 //! read round trip in the same format (bit-exact coordinates for OBJ, OFF and
-//! PLY; STL stores f32, so there only the triangle count and the f32 values).
+//! PLY; STL and glTF store f32, so there only the triangle count and the f32
+//! values).
 
 use normalnet_mesh::io::{Format, WriteOptions, encode_mesh, parse_mesh};
 use std::path::Path;
@@ -20,12 +21,12 @@ pub fn check_reader(bytes: &[u8], format: Format) {
     let again = parse_mesh(&encoded, format, path)
         .unwrap_or_else(|e| panic!("a mesh the reader accepted does not read back: {e}"));
     match format {
-        Format::Stl => {
+        Format::Stl | Format::Gltf | Format::Glb => {
             assert_eq!(again.num_faces(), mesh.num_faces());
             for f in 0..mesh.num_faces() {
                 let a = mesh.corners(f).map(|p| p.map(|x| x as f32));
                 let b = again.corners(f).map(|p| p.map(|x| x as f32));
-                assert_eq!(a, b, "STL round trip changed face {f}");
+                assert_eq!(a, b, "f32 round trip changed face {f}");
             }
         }
         _ => {

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 /// Extensions of the mesh writers (`normalnet_mesh::io::Format`).
-pub const MESH: &[&str] = &["obj", "off", "ply", "stl"];
+pub const MESH: &[&str] = &["obj", "off", "ply", "stl", "gltf", "glb"];
 
 /// Pictures: the rasterizer writes PNG only.
 pub const PNG: &[&str] = &["png"];
@@ -213,7 +213,10 @@ mod tests {
             "{e:#}"
         );
         let e = check_file(&d.join("out.xyz"), MESH, "output mesh").unwrap_err();
-        assert!(format!("{e:#}").contains(".obj, .off, .ply, .stl"), "{e:#}");
+        assert!(
+            format!("{e:#}").contains(".obj, .off, .ply, .stl, .gltf, .glb"),
+            "{e:#}"
+        );
         let e = check_file(&d.join("noext"), MESH, "output mesh").unwrap_err();
         assert!(format!("{e:#}").contains("no extension"), "{e:#}");
         let e = check_file(&d.join("missing/out.obj"), MESH, "output mesh").unwrap_err();

@@ -53,7 +53,7 @@ pub enum MeshError {
         source: std::io::Error,
     },
     /// The format could not be chosen from the extension.
-    #[error("{path}: unknown mesh format (expected .obj, .off, .ply or .stl)")]
+    #[error("{path}: unknown mesh format (expected .obj, .off, .ply, .stl, .gltf or .glb)")]
     UnknownFormat {
         /// the file
         path: PathBuf,

@@ -1,6 +1,6 @@
 //! Triangle meshes for NormalNet: the `Mesh` (positions + faces), its
 //! `Topology` (flat CSR connectivity, r-rings), per-face geometry, file I/O
-//! (OBJ, OFF, PLY, STL; with `read_mesh_file` / `write_mesh_file`, also
+//! (OBJ, OFF, PLY, STL, glTF/GLB; with `read_mesh_file` / `write_mesh_file`, also
 //! what a file carries beyond positions and triangles), the noise models of the literature and the error
 //! metrics E_a / E_v (SPEC §1–3).
 //!

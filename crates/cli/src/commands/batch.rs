@@ -132,7 +132,10 @@ pub fn collect_inputs(inputs: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>> {
         }
     }
     if files.is_empty() {
-        bail!("no mesh files (.obj, .off, .ply, .stl) in {:?}", inputs);
+        bail!(
+            "no mesh files (.obj, .off, .ply, .stl, .gltf, .glb) in {:?}",
+            inputs
+        );
     }
     Ok(files)
 }
@@ -203,7 +206,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(s) = &args.suffix {
         let ext = s.trim_start_matches('.');
         if !output::MESH.contains(&ext) {
-            bail!("--suffix {s}: expected one of .obj, .off, .ply, .stl");
+            bail!("--suffix {s}: expected one of .obj, .off, .ply, .stl, .gltf, .glb");
         }
     }
     let files = collect_inputs(&args.inputs)?;

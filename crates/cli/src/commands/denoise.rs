@@ -201,7 +201,7 @@ pub struct MethodArgs {
 /// Arguments of `normalnet denoise`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Noisy input mesh (.obj, .off, .ply, .stl).
+    /// Noisy input mesh (.obj, .off, .ply, .stl, .gltf, .glb).
     pub input: PathBuf,
     /// Output mesh (format from the extension; written atomically).
     pub output: PathBuf,

@@ -15,12 +15,12 @@ use std::time::Instant;
 /// Arguments of `normalnet info`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Mesh file (.obj, .off, .ply, .stl).
+    /// Mesh file (.obj, .off, .ply, .stl, .gltf, .glb).
     pub mesh: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Read as this format whatever the extension (obj, off, ply, stl).
+    /// Read as this format whatever the extension (obj, off, ply, stl, gltf, glb).
     #[arg(long, value_parser = parse_format)]
     pub format: Option<Format>,
 }
@@ -36,7 +36,7 @@ pub fn format_for(path: &std::path::Path, over: Option<Format>) -> anyhow::Resul
     match over.or_else(|| Format::from_path(path)) {
         Some(f) => Ok(f),
         None => anyhow::bail!(
-            "{}: unknown mesh format (expected .obj, .off, .ply or .stl, or pass --format)",
+            "{}: unknown mesh format (expected .obj, .off, .ply, .stl, .gltf or .glb, or pass --format)",
             path.display()
         ),
     }

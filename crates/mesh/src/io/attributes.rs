@@ -38,8 +38,19 @@
 //!   follows each vertex's x y z and each face's indices (colours) as
 //!   written. Comments are dropped (a warning says how many); the header's
 //!   edge count is written as 0.
+//! - glTF and GLB ([`GltfAttributes`]): the whole document and its buffers.
+//!   The mesh is every triangle primitive of the scene at its node's world
+//!   transform, welded by exactly equal world positions (seams between
+//!   primitives stay closed); written back, each `POSITION` accessor gets
+//!   its moved vertices in place (local space, f32) and new `min`/`max`,
+//!   `NORMAL` is recomputed, `TANGENT` dropped with a warning; materials,
+//!   textures, images, UVs, colours, extensions and the buffer layout pass
+//!   through. Buffer files are written beside the output (`<stem>.bin`),
+//!   image URIs rewritten relative to the output's folder; `.gltf` ↔
+//!   `.glb` converts the container (the glTF module documents the rest).
 //!
-//! A mesh written in another format than it was read from keeps its
+//! A mesh written in another format than it was read from (glTF and GLB
+//! count as one) keeps its
 //! positions and triangles only ([`write_mesh`]), with a warning naming what
 //! was dropped. Warnings are returned, never printed: the caller decides.
 
@@ -50,6 +61,9 @@ use crate::vec3::{self, Vec3};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+pub use super::gltf::{
+    GltfAttributes, GltfBuffer, GltfBufferSource, GltfContainer, GltfPositions, GltfPrimitive,
+};
 pub use super::obj::{ObjAttributes, ObjStatement};
 pub use super::off::OffAttributes;
 pub use super::ply::{
@@ -105,6 +119,8 @@ pub enum FormatAttributes {
     Ply(PlyAttributes),
     /// STL
     Stl(StlAttributes),
+    /// glTF 2.0 (`.gltf` or `.glb`)
+    Gltf(GltfAttributes),
 }
 
 impl Attributes {
@@ -115,6 +131,10 @@ impl Attributes {
             FormatAttributes::Off(_) => Format::Off,
             FormatAttributes::Ply(_) => Format::Ply,
             FormatAttributes::Stl(_) => Format::Stl,
+            FormatAttributes::Gltf(ref g) => match g.container {
+                GltfContainer::Json => Format::Gltf,
+                GltfContainer::Binary => Format::Glb,
+            },
         }
     }
 
@@ -181,7 +201,7 @@ pub fn read_mesh_file_as(path: impl AsRef<Path>, format: Format) -> Result<MeshF
         path: path.to_path_buf(),
         source,
     })?;
-    let mut file = parse_mesh_file(&bytes, format, path)?;
+    let mut file = parse_mesh_file_in(&bytes, format, path, Some(&absolute_dir(path)))?;
     file.attributes.source_dir = Some(absolute_dir(path));
     if let FormatAttributes::Obj(obj) = &file.attributes.content {
         file.warnings
@@ -192,11 +212,23 @@ pub fn read_mesh_file_as(path: impl AsRef<Path>, format: Format) -> Result<MeshF
 
 /// Parses a mesh file from memory; `path` names it in errors and warnings
 /// ([`Attributes::source_dir`] stays `None`: written back, OBJ `mtllib`
-/// names are kept as read).
+/// names and glTF image URIs are kept as read; a `.gltf` whose buffers are
+/// files is refused, [`read_mesh_file`] reads them).
 ///
 /// # Errors
 /// As [`read_mesh_file`].
 pub fn parse_mesh_file(bytes: &[u8], format: Format, path: &Path) -> Result<MeshFile, MeshError> {
+    parse_mesh_file_in(bytes, format, path, None)
+}
+
+/// [`parse_mesh_file`]; `dir` is the folder a `.gltf`'s buffer files are
+/// read from (`None`: refused).
+fn parse_mesh_file_in(
+    bytes: &[u8],
+    format: Format,
+    path: &Path,
+    dir: Option<&Path>,
+) -> Result<MeshFile, MeshError> {
     let mut warnings = Vec::new();
     let (positions, faces, polygon_sizes, content) = match format {
         Format::Obj => {
@@ -236,6 +268,12 @@ pub fn parse_mesh_file(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh
             }
             (p, f, sizes, FormatAttributes::Stl(stl))
         }
+        Format::Gltf | Format::Glb => {
+            let ((p, f, (sizes, gltf)), read_warnings) =
+                super::gltf::parse_with_attributes(bytes, path, dir)?;
+            warnings.extend(read_warnings);
+            (p, f, sizes, FormatAttributes::Gltf(gltf))
+        }
     };
     let num_vertices = positions.len();
     let mesh = super::finish(positions, faces, path)?;
@@ -272,7 +310,10 @@ pub fn write_mesh_file(
 
 /// [`write_mesh_file`] in the given format, whatever the extension. A
 /// format other than the one the attributes were read from gets the
-/// positions and triangles only ([`write_mesh_as`]) and a warning.
+/// positions and triangles only ([`write_mesh_as`]) and a warning; glTF
+/// and GLB convert into each other with everything. A glTF whose buffers
+/// are files writes them beside `path` first (`<stem>.bin`, each
+/// atomically), then `path`.
 ///
 /// # Errors
 /// As [`write_mesh_file`].
@@ -285,6 +326,9 @@ pub fn write_mesh_file_as(
 ) -> Result<Vec<String>, MeshError> {
     let path = path.as_ref();
     attributes.check_matches(mesh)?;
+    if let (FormatAttributes::Gltf(gltf), true) = (&attributes.content, format.is_gltf()) {
+        return write_gltf_files(path, mesh, gltf, attributes.source_dir.as_deref(), format);
+    }
     if format != attributes.format() {
         write_mesh_as(
             path,
@@ -314,8 +358,51 @@ pub fn write_mesh_file_as(
     Ok(Vec::new())
 }
 
+/// A glTF document and its buffer files, written beside `path` (see
+/// [`write_mesh_file_as`]); returns the writer's warnings.
+fn write_gltf_files(
+    path: &Path,
+    mesh: &Mesh,
+    gltf: &GltfAttributes,
+    source_dir: Option<&Path>,
+    format: Format,
+) -> Result<Vec<String>, MeshError> {
+    let target = super::write_target(path);
+    let out_dir = absolute_dir(&target);
+    let stem = target
+        .file_stem()
+        .map_or_else(|| "mesh".into(), |s| s.to_string_lossy().into_owned());
+    let output = super::gltf::Output {
+        container: if format == Format::Glb {
+            GltfContainer::Binary
+        } else {
+            GltfContainer::Json
+        },
+        stem: Some(&stem),
+        from: source_dir,
+        to: Some(&out_dir),
+    };
+    let encoded = super::gltf::encode_with_attributes(mesh, gltf, &output).map_err(|source| {
+        MeshError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    })?;
+    let dir = super::target_dir(&target);
+    for (name, bytes) in &encoded.files {
+        write_atomically(&dir.join(name), |w| w.write_all(bytes))?;
+    }
+    write_atomically(path, |w| w.write_all(&encoded.main))?;
+    Ok(encoded
+        .warnings
+        .into_iter()
+        .map(|w| format!("{}: {w}", path.display()))
+        .collect())
+}
+
 /// Encodes `mesh` with `attributes` into memory, in the attributes' format
-/// (what [`write_mesh_file`] writes; OBJ `mtllib` names as read).
+/// (what [`write_mesh_file`] writes; OBJ `mtllib` names and glTF image
+/// URIs as read, a `.gltf`'s buffer files embedded as `data:` URIs).
 ///
 /// # Errors
 /// [`MeshError::Mismatch`] as [`write_mesh_file`]; [`MeshError::Io`] when
@@ -360,6 +447,16 @@ fn write_attributes(
             super::ply::write_with_attributes(w, mesh, &polygons, ply, options.ply_ascii)
         }
         FormatAttributes::Stl(stl) => super::stl::write_with_attributes(w, mesh, &polygons, stl),
+        FormatAttributes::Gltf(gltf) => {
+            let output = super::gltf::Output {
+                container: gltf.container,
+                stem: None,
+                from: attributes.source_dir.as_deref(),
+                to: out_dir,
+            };
+            let encoded = super::gltf::encode_with_attributes(mesh, gltf, &output)?;
+            w.write_all(&encoded.main)
+        }
     }
 }
 
@@ -427,6 +524,7 @@ impl Attributes {
                     "facet attribute bytes",
                 );
             }
+            FormatAttributes::Gltf(gltf) => held.extend(gltf.describe()),
         }
         held
     }

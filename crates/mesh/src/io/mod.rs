@@ -1,16 +1,21 @@
-//! Mesh file I/O (SPEC §1): OBJ, OFF, PLY (ASCII and binary) and STL (ASCII
-//! and binary) readers, OBJ/OFF/PLY/STL writers.
+//! Mesh file I/O (SPEC §1): OBJ, OFF, PLY (ASCII and binary), STL (ASCII
+//! and binary) and glTF 2.0 (`.gltf` and `.glb`) readers and writers.
 //!
 //! Policy, identical for every format:
 //! - vertex order and face order of the file are kept; polygons are
 //!   fan-triangulated `(v0, v_i, v_{i+1})` in file order, so the error metrics
-//!   can compare meshes face by face;
+//!   can compare meshes face by face. glTF is the exception by nature: its
+//!   mesh is every triangle primitive of the scene in world space (node
+//!   transforms applied), the primitives' vertices welded by exactly equal
+//!   world positions in order of first appearance, their triangles in
+//!   order ([`attributes`] and the glTF module say how it is written back);
 //! - [`read_mesh`] reads past attributes other than positions and face
 //!   indices (texture coordinates, normals, colours, extra PLY properties,
 //!   groups, materials) and [`write_mesh`] writes positions and triangles
 //!   only; [`read_mesh_file`] / [`write_mesh_file`] keep them
 //!   ([`attributes`] says what each format keeps);
-//! - only STL, which has no shared vertices, merges bit-identical coincident
+//! - only STL, which has no shared vertices, and glTF, whose primitives
+//!   split at material and UV seams, merge bit-identical coincident
 //!   vertices (in order of first appearance);
 //! - any defect (truncated file, bad index, non-finite coordinate, wrong
 //!   element count, empty file, a line that is no statement of the format)
@@ -21,13 +26,16 @@
 //!   keywords are matched case-insensitively where writers are known to vary
 //!   (OBJ `v`/`f`, the OFF header, every ASCII STL keyword);
 //! - writers print coordinates in the shortest decimal form that reads back
-//!   to the same `f64` (text formats), or the exact bits (binary PLY); STL is
-//!   f32 by definition. Output is written to a temporary file in the target
+//!   to the same `f64` (text formats), or the exact bits (binary PLY); STL and
+//!   glTF are f32 by definition (a glTF of another format's mesh: one node,
+//!   one primitive, u32 indices, its buffer a `data:` URI or the GLB BIN
+//!   chunk). Output is written to a temporary file in the target
 //!   directory and renamed into place, so a crash never leaves half a mesh;
 //!   an output that is a symbolic link is written through (its target gets
 //!   the mesh, the link stays) and a read-only output file is refused.
 
 pub mod attributes;
+mod gltf;
 mod obj;
 mod off;
 mod ply;
@@ -56,6 +64,11 @@ pub enum Format {
     Ply,
     /// STL, ASCII or binary (detected from the content); written as binary.
     Stl,
+    /// glTF 2.0 as JSON (`.gltf`; buffers in `data:` URIs or files beside
+    /// it). A GLB file is read whatever its extension (told by content).
+    Gltf,
+    /// glTF 2.0 binary (`.glb`: JSON chunk and BIN chunk).
+    Glb,
 }
 
 impl Format {
@@ -67,21 +80,33 @@ impl Format {
             "off" => Some(Format::Off),
             "ply" => Some(Format::Ply),
             "stl" => Some(Format::Stl),
+            "gltf" => Some(Format::Gltf),
+            "glb" => Some(Format::Glb),
             _ => None,
         }
     }
 
-    /// The format's usual name in text: `OBJ`, `OFF`, `PLY`, `STL`.
+    /// The format's usual name in text: `OBJ`, `OFF`, `PLY`, `STL`,
+    /// `glTF`, `GLB`.
     pub fn name(self) -> &'static str {
         match self {
             Format::Obj => "OBJ",
             Format::Off => "OFF",
             Format::Ply => "PLY",
             Format::Stl => "STL",
+            Format::Gltf => "glTF",
+            Format::Glb => "GLB",
         }
     }
 
-    /// Parses a format name (`obj`, `off`, `ply`, `stl`; case-insensitive).
+    /// Whether this is one of the two containers of glTF 2.0 (`.gltf`,
+    /// `.glb`), between which the attribute writers convert.
+    pub fn is_gltf(self) -> bool {
+        matches!(self, Format::Gltf | Format::Glb)
+    }
+
+    /// Parses a format name (`obj`, `off`, `ply`, `stl`, `gltf`, `glb`;
+    /// case-insensitive).
     pub fn from_name(name: &str) -> Option<Format> {
         Format::from_path(Path::new(&format!("x.{name}")))
     }
@@ -120,14 +145,26 @@ pub fn read_mesh_as(path: impl AsRef<Path>, format: Format) -> Result<Mesh, Mesh
         path: path.to_path_buf(),
         source,
     })?;
-    parse_mesh(&bytes, format, path)
+    parse_mesh_in(&bytes, format, path, Some(&target_dir(path)))
 }
 
-/// Parses a mesh from memory; `path` is only used in error messages.
+/// Parses a mesh from memory; `path` is only used in error messages (a
+/// `.gltf` whose buffers are files is refused: [`read_mesh`] reads them).
 ///
 /// # Errors
 /// As [`read_mesh`].
 pub fn parse_mesh(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh, MeshError> {
+    parse_mesh_in(bytes, format, path, None)
+}
+
+/// [`parse_mesh`]; `dir` is the folder a `.gltf`'s buffer files are read
+/// from (`None`: refused).
+fn parse_mesh_in(
+    bytes: &[u8],
+    format: Format,
+    path: &Path,
+    dir: Option<&Path>,
+) -> Result<Mesh, MeshError> {
     let (positions, faces) = match format {
         Format::Obj => obj::parse(strip_bom(bytes), path)?,
         Format::Off => off::parse(strip_bom(bytes), path)?,
@@ -135,6 +172,7 @@ pub fn parse_mesh(bytes: &[u8], format: Format, path: &Path) -> Result<Mesh, Mes
         // A binary STL header is 80 arbitrary bytes: the reader strips the
         // mark only once it knows the file is text.
         Format::Stl => stl::parse(bytes, path)?,
+        Format::Gltf | Format::Glb => gltf::parse(bytes, path, dir)?,
     };
     finish(positions, faces, path)
 }
@@ -193,12 +231,14 @@ fn write_format(
         Format::Off => off::write(w, mesh),
         Format::Ply => ply::write(w, mesh, options.ply_ascii),
         Format::Stl => stl::write(w, mesh),
+        Format::Gltf => gltf::write(w, mesh, gltf::GltfContainer::Json),
+        Format::Glb => gltf::write(w, mesh, gltf::GltfContainer::Binary),
     }
 }
 
-/// Checks, before any work, that `format` can hold `mesh`: STL stores f32,
-/// so every coordinate must lie within its range (the text formats and PLY
-/// hold any f64). `path` is the output, named in the error.
+/// Checks, before any work, that `format` can hold `mesh`: STL and glTF
+/// store f32, so every coordinate must lie within its range (the text
+/// formats and PLY hold any f64). `path` is the output, named in the error.
 ///
 /// # Errors
 /// [`MeshError::Io`] (`InvalidData`) naming `path` and the first vertex out
@@ -206,6 +246,7 @@ fn write_format(
 pub fn check_encodable(path: &Path, mesh: &Mesh, format: Format) -> Result<(), MeshError> {
     match format {
         Format::Stl => stl::check_range(mesh),
+        Format::Gltf | Format::Glb => gltf::check_range(mesh),
         Format::Obj | Format::Off | Format::Ply => Ok(()),
     }
     .map_err(|source| MeshError::Io {
@@ -217,7 +258,8 @@ pub fn check_encodable(path: &Path, mesh: &Mesh, format: Format) -> Result<(), M
 /// Encodes a mesh into memory (what [`write_mesh_as`] would write).
 ///
 /// # Errors
-/// A mesh the format cannot hold (STL: a coordinate beyond f32's range).
+/// A mesh the format cannot hold (STL, glTF: a coordinate beyond f32's
+/// range).
 pub fn encode_mesh(
     mesh: &Mesh,
     format: Format,

@@ -733,3 +733,22 @@ fn check_encodable_refuses_stl_beyond_f32_only() {
     }
     check_encodable(out, &parse_obj(QUAD_OBJ).unwrap(), Format::Stl).unwrap();
 }
+
+#[test]
+fn gltf_formats_by_extension_and_name() {
+    assert_eq!(Format::from_path(Path::new("a.GLTF")), Some(Format::Gltf));
+    assert_eq!(Format::from_path(Path::new("a.glb")), Some(Format::Glb));
+    assert_eq!(Format::from_name("glb"), Some(Format::Glb));
+    assert_eq!(Format::Gltf.name(), "glTF");
+    assert!(Format::Glb.is_gltf() && !Format::Stl.is_gltf());
+    let far = Mesh::new(
+        vec![[0.0; 3], [1e39, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    for format in [Format::Gltf, Format::Glb] {
+        let e = check_encodable(Path::new("o.glb"), &far, format).unwrap_err();
+        assert!(e.to_string().contains("vertex 1"), "{e}");
+        assert!(encode_mesh(&far, format, &WriteOptions::default()).is_err());
+    }
+}

@@ -1,0 +1,248 @@
+//! Accessors and buffer views (glTF 2.0 §3.6 "Binary Data Storage"): where
+//! an accessor's elements lie in a buffer, checked against the bytes there
+//! are, and the element readers and writers of the few layouts this crate
+//! touches (`VEC3` of `FLOAT`, `SCALAR` indices).
+
+use serde_json::{Map, Value};
+
+/// `componentType` of 32-bit floats.
+pub(crate) const FLOAT: u64 = 5126;
+/// `componentType` of unsigned bytes, shorts and ints (the index types).
+pub(crate) const UNSIGNED_BYTE: u64 = 5121;
+pub(crate) const UNSIGNED_SHORT: u64 = 5123;
+pub(crate) const UNSIGNED_INT: u64 = 5125;
+
+/// The bytes of a component type, `None` for a type glTF does not define.
+fn component_size(component_type: u64) -> Option<usize> {
+    match component_type {
+        5120 | 5121 => Some(1),
+        5122 | 5123 => Some(2),
+        5125 | 5126 => Some(4),
+        _ => None,
+    }
+}
+
+/// The components of an accessor `type`.
+fn components(kind: &str) -> Option<usize> {
+    match kind {
+        "SCALAR" => Some(1),
+        "VEC2" => Some(2),
+        "VEC3" => Some(3),
+        "VEC4" | "MAT2" => Some(4),
+        "MAT3" => Some(9),
+        "MAT4" => Some(16),
+        _ => None,
+    }
+}
+
+/// The array `name` of the document's root (empty when absent).
+pub(crate) fn root_array<'a>(json: &'a Value, name: &str) -> Result<&'a [Value], String> {
+    match json.get(name) {
+        None => Ok(&[]),
+        Some(Value::Array(items)) => Ok(items),
+        Some(_) => Err(format!("{name} is not an array")),
+    }
+}
+
+/// Item `index` of the root array `name` (`meshes`, `accessors`, …), which
+/// must be an object.
+pub(crate) fn item<'a>(
+    json: &'a Value,
+    name: &str,
+    index: usize,
+) -> Result<&'a Map<String, Value>, String> {
+    let items = root_array(json, name)?;
+    match items.get(index) {
+        Some(Value::Object(o)) => Ok(o),
+        Some(_) => Err(format!("{name}[{index}] is not an object")),
+        None => Err(format!(
+            "{name}[{index}] does not exist (the file has {} {name})",
+            items.len()
+        )),
+    }
+}
+
+/// The non-negative integer `key` of `object` (`what` names the object in
+/// the error), `None` when absent.
+pub(crate) fn uint(
+    object: &Map<String, Value>,
+    key: &str,
+    what: &str,
+) -> Result<Option<usize>, String> {
+    match object.get(key) {
+        None => Ok(None),
+        Some(v) => v
+            .as_u64()
+            .and_then(|n| usize::try_from(n).ok())
+            .map(Some)
+            .ok_or_else(|| format!("{what}.{key} is {v}, not a non-negative integer")),
+    }
+}
+
+/// Where an accessor's elements lie: element `i` starts at byte
+/// `offset + i · stride` of buffer `buffer`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Layout {
+    /// the buffer holding the elements
+    pub buffer: usize,
+    /// byte offset of element 0 in the buffer
+    pub offset: usize,
+    /// bytes from one element to the next
+    pub stride: usize,
+    /// number of elements
+    pub count: usize,
+    /// `componentType`
+    pub component_type: u64,
+    /// components per element (3 for `VEC3`)
+    pub components: usize,
+}
+
+impl Layout {
+    /// Byte offset of element `i` in the buffer.
+    pub(crate) fn at(&self, i: usize) -> usize {
+        self.offset + i * self.stride
+    }
+}
+
+/// The layout of `accessors[index]`, checked: the accessor is dense (not
+/// sparse) and stored in a buffer view (not implicit zeros), its buffer
+/// view lies within its buffer's bytes (`buffer_lengths`) and every element
+/// within the view. Errors name the accessor or view.
+pub(crate) fn layout(
+    json: &Value,
+    buffer_lengths: &[usize],
+    index: usize,
+) -> Result<Layout, String> {
+    let what = format!("accessors[{index}]");
+    let accessor = item(json, "accessors", index)?;
+    if accessor.contains_key("sparse") {
+        return Err(format!(
+            "{what} is sparse (sparse accessors are not supported)"
+        ));
+    }
+    let view_index = uint(accessor, "bufferView", &what)?
+        .ok_or_else(|| format!("{what} has no bufferView (implicit zeros are not supported)"))?;
+    let component_type = accessor
+        .get("componentType")
+        .and_then(Value::as_u64)
+        .ok_or_else(|| format!("{what} has no componentType"))?;
+    let size = component_size(component_type).ok_or_else(|| {
+        format!("{what} has componentType {component_type}, which glTF does not define")
+    })?;
+    let kind = accessor.get("type").and_then(Value::as_str).unwrap_or("");
+    let n = components(kind)
+        .ok_or_else(|| format!("{what} has type {kind:?}, which glTF does not define"))?;
+    let count = uint(accessor, "count", &what)?.ok_or_else(|| format!("{what} has no count"))?;
+    let accessor_offset = uint(accessor, "byteOffset", &what)?.unwrap_or(0);
+
+    let view_what = format!("bufferViews[{view_index}]");
+    let view = item(json, "bufferViews", view_index)?;
+    if view
+        .get("extensions")
+        .is_some_and(|e| e.get("EXT_meshopt_compression").is_some())
+    {
+        return Err(format!(
+            "{view_what} (of {what}) is compressed with EXT_meshopt_compression, which is not supported"
+        ));
+    }
+    let buffer =
+        uint(view, "buffer", &view_what)?.ok_or_else(|| format!("{view_what} has no buffer"))?;
+    let view_offset = uint(view, "byteOffset", &view_what)?.unwrap_or(0);
+    let view_length = uint(view, "byteLength", &view_what)?
+        .ok_or_else(|| format!("{view_what} has no byteLength"))?;
+    let element = size * n;
+    let stride = uint(view, "byteStride", &view_what)?.unwrap_or(element);
+    if stride < element {
+        return Err(format!(
+            "{view_what} has byteStride {stride}, less than the {element} bytes of an element of {what}"
+        ));
+    }
+    let buffer_length = *buffer_lengths.get(buffer).ok_or_else(|| {
+        format!(
+            "{view_what} refers to buffers[{buffer}], the file has {}",
+            buffer_lengths.len()
+        )
+    })?;
+    let view_end = view_offset.checked_add(view_length);
+    if view_end.is_none_or(|end| end > buffer_length) {
+        return Err(format!(
+            "{view_what} (bytes {view_offset} + {view_length}) runs past the end of buffers[{buffer}] \
+             ({buffer_length} bytes)"
+        ));
+    }
+    let end = match count {
+        0 => Some(accessor_offset),
+        _ => (count - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(accessor_offset))
+            .and_then(|x| x.checked_add(element)),
+    };
+    if end.is_none_or(|end| end > view_length) {
+        return Err(format!(
+            "{what} ({count} elements of {element} bytes, stride {stride}, from byte {accessor_offset}) \
+             is out of range: {view_what} has {view_length} bytes"
+        ));
+    }
+    Ok(Layout {
+        buffer,
+        offset: view_offset + accessor_offset,
+        stride,
+        count,
+        component_type,
+        components: n,
+    })
+}
+
+/// Element `i` of a `VEC3` `FLOAT` accessor.
+pub(crate) fn read_vec3(buffer: &[u8], layout: &Layout, i: usize) -> [f32; 3] {
+    let at = layout.at(i);
+    std::array::from_fn(|c| {
+        let b = &buffer[at + 4 * c..at + 4 * c + 4];
+        f32::from_le_bytes([b[0], b[1], b[2], b[3]])
+    })
+}
+
+/// Writes element `i` of a `VEC3` `FLOAT` accessor.
+pub(crate) fn write_vec3(buffer: &mut [u8], layout: &Layout, i: usize, v: [f32; 3]) {
+    let at = layout.at(i);
+    for (c, x) in v.iter().enumerate() {
+        buffer[at + 4 * c..at + 4 * c + 4].copy_from_slice(&x.to_le_bytes());
+    }
+}
+
+/// Element `i` of an index accessor (`UNSIGNED_BYTE`, `_SHORT` or `_INT`).
+pub(crate) fn read_index(buffer: &[u8], layout: &Layout, i: usize) -> u32 {
+    let at = layout.at(i);
+    match layout.component_type {
+        UNSIGNED_BYTE => buffer[at] as u32,
+        UNSIGNED_SHORT => u16::from_le_bytes([buffer[at], buffer[at + 1]]) as u32,
+        _ => u32::from_le_bytes([buffer[at], buffer[at + 1], buffer[at + 2], buffer[at + 3]]),
+    }
+}
+
+/// An f32 as the JSON number with the fewest digits that reads back to it
+/// (`0.1`, not `0.10000000149011612`).
+pub(crate) fn json_f32(x: f32) -> Value {
+    let shortest: f64 = x.to_string().parse().unwrap_or(x as f64);
+    serde_json::Number::from_f64(shortest).map_or(Value::Null, Value::Number)
+}
+
+/// Sets `accessors[index].min` / `.max` to the component-wise bounds of
+/// `values` (left alone when `values` is empty).
+pub(crate) fn set_bounds(json: &mut Value, index: usize, values: &[[f32; 3]]) {
+    if values.is_empty() {
+        return;
+    }
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for v in values {
+        for c in 0..3 {
+            lo[c] = lo[c].min(v[c]);
+            hi[c] = hi[c].max(v[c]);
+        }
+    }
+    if let Some(Value::Object(a)) = json.get_mut("accessors").and_then(|a| a.get_mut(index)) {
+        a.insert("min".into(), Value::Array(lo.map(json_f32).to_vec()));
+        a.insert("max".into(), Value::Array(hi.map(json_f32).to_vec()));
+    }
+}
