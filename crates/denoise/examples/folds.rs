@@ -11,8 +11,8 @@
 //! only those methods. A `!` marks more flipped faces than the input.
 
 use normalnet_denoise::{Denoiser, METHODS};
-use normalnet_mesh::metrics::per_face_angle_errors;
 use normalnet_filters::{FoldCheck, repair_folds};
+use normalnet_mesh::metrics::per_face_angle_errors;
 use normalnet_mesh::{Mesh, NoProgress, Topology, geometry::face_normals, read_mesh, vec3};
 
 /// (flipped faces, folded faces, E_a in degrees) of `result` against `gt`.
@@ -24,7 +24,11 @@ fn score(result: &Mesh, gt: &Mesh, check: &FoldCheck) -> (usize, usize, f64) {
         .filter(|(x, y)| vec3::dot(**x, **y) < 0.0)
         .count();
     let e = per_face_angle_errors(gt, result).unwrap();
-    (flipped, check.count(&result.positions), e.iter().sum::<f64>() / e.len() as f64)
+    (
+        flipped,
+        check.count(&result.positions),
+        e.iter().sum::<f64>() / e.len() as f64,
+    )
 }
 
 fn main() {
@@ -48,12 +52,17 @@ fn main() {
         let (f, g, e) = score(&noisy, &clean, &check);
         println!("| {name} | noisy input | {f} | | {g} | | {e:.3} | | | |");
         for info in METHODS {
-            if keep.as_ref().is_some_and(|k| !k.iter().any(|m| m == info.name)) {
+            if keep
+                .as_ref()
+                .is_some_and(|k| !k.iter().any(|m| m == info.name))
+            {
                 continue;
             }
             // The method's result, then the repair `Denoiser::run` applies
             // to it (the same result: these meshes need no rescaling).
-            let d = Denoiser::with_defaults(info.name).unwrap().with_fold_repair(false);
+            let d = Denoiser::with_defaults(info.name)
+                .unwrap()
+                .with_fold_repair(false);
             let off = d.denoise(&noisy, Some(&clean), &NoProgress).unwrap();
             let t = std::time::Instant::now();
             let mut on = off.clone();

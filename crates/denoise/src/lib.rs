@@ -195,11 +195,7 @@ impl Denoiser {
         let mut outcome = self.method.run(mesh, gt, progress)?;
         if self.repairs_folds() && outcome.mesh.faces == mesh.faces {
             let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-            outcome.folds = Some(repair_folds(
-                mesh,
-                &mut outcome.mesh.positions,
-                &topology,
-            ));
+            outcome.folds = Some(repair_folds(mesh, &mut outcome.mesh.positions, &topology));
         }
         Ok(outcome)
     }

@@ -134,8 +134,16 @@ impl<'a> FoldCheck<'a> {
     /// # Panics
     /// If `topology` was built for other faces or another vertex count.
     pub fn new(input: &[Vec3], faces: &'a [[u32; 3]], topology: &'a Topology) -> FoldCheck<'a> {
-        assert_eq!(topology.num_faces(), faces.len(), "topology of another mesh");
-        assert_eq!(topology.num_vertices, input.len(), "topology of another mesh");
+        assert_eq!(
+            topology.num_faces(),
+            faces.len(),
+            "topology of another mesh"
+        );
+        assert_eq!(
+            topology.num_vertices,
+            input.len(),
+            "topology of another mesh"
+        );
         let (n, input_areas) = normals_areas(input, faces);
         let reference = (0..faces.len())
             .into_par_iter()
@@ -161,7 +169,8 @@ impl<'a> FoldCheck<'a> {
     pub fn is_folded(&self, normals: &[Vec3], areas: &[f64], f: usize) -> bool {
         let n_f = normals[f];
         let d = dot(n_f, self.reference[f]);
-        if d < FOLD_CONE_COS || (d < SLIVER_CONE_COS && areas[f] < SLIVER_AREA * self.input_areas[f])
+        if d < FOLD_CONE_COS
+            || (d < SLIVER_CONE_COS && areas[f] < SLIVER_AREA * self.input_areas[f])
         {
             return true;
         }
@@ -196,7 +205,11 @@ impl<'a> FoldCheck<'a> {
 /// If `output` and `input` differ in vertex count or `topology` is not the
 /// input's.
 pub fn repair_folds(input: &Mesh, output: &mut [Vec3], topology: &Topology) -> FoldReport {
-    assert_eq!(input.positions.len(), output.len(), "one position per vertex");
+    assert_eq!(
+        input.positions.len(),
+        output.len(),
+        "one position per vertex"
+    );
     let check = FoldCheck::new(&input.positions, &input.faces, topology);
     let count_input = check.count(&input.positions);
     let mut repair = Repair::new(&check, &input.positions, output);
@@ -265,7 +278,9 @@ fn shorten_towards_input(check: &FoldCheck, input: &[Vec3], p: &mut [Vec3], targ
         }
         let mut vertices = Vec::new();
         for f in (0..folded.len()).filter(|&f| folded[f] && !folded_input[f]) {
-            for g in std::iter::once(f as u32).chain(check.topology.face_neighbours.row(f).iter().copied()) {
+            for g in std::iter::once(f as u32)
+                .chain(check.topology.face_neighbours.row(f).iter().copied())
+            {
                 if !mark[g as usize] {
                     mark[g as usize] = true;
                     vertices.extend(check.faces[g as usize]);
@@ -406,7 +421,13 @@ impl<'c, 'a> Repair<'c, 'a> {
         let x = self.p[v];
         let saved: Vec<(Vec3, f64, bool)> = star
             .iter()
-            .map(|&f| (self.n[f as usize], self.areas[f as usize], self.is_folded(f)))
+            .map(|&f| {
+                (
+                    self.n[f as usize],
+                    self.areas[f as usize],
+                    self.is_folded(f),
+                )
+            })
             .collect();
         let u = self.umbrella(v);
         let x0 = self.input[v];
@@ -418,8 +439,7 @@ impl<'c, 'a> Repair<'c, 'a> {
                 let n = self.n[f as usize];
                 let r = self.check.reference[f as usize];
                 folded0
-                    || (dot(n, n0) >= STEP_TURN_COS
-                        && dot(n, r) >= dot(n0, r).min(STEP_TURN_COS))
+                    || (dot(n, n0) >= STEP_TURN_COS && dot(n, r) >= dot(n0, r).min(STEP_TURN_COS))
             });
             if keeps_others && self.count(&region) < before {
                 return true;
@@ -460,9 +480,9 @@ impl<'c, 'a> Repair<'c, 'a> {
             }
         }
         let mut clusters: Vec<Vec<u32>> = vec![Vec::new(); folded.len()];
-        for i in 0..folded.len() {
+        for (i, &f) in folded.iter().enumerate() {
             let r = root(&mut parent, i);
-            clusters[r].push(folded[i]);
+            clusters[r].push(f);
         }
         let mut moved = 0;
         for cluster in clusters.iter().filter(|c| !c.is_empty()) {
@@ -481,7 +501,10 @@ impl<'c, 'a> Repair<'c, 'a> {
             let saved: Vec<Vec3> = vertices.iter().map(|&v| self.p[v as usize]).collect();
             let mut better = false;
             for _ in 0..CLUSTER_SMOOTHINGS {
-                let next: Vec<Vec3> = vertices.iter().map(|&v| self.umbrella(v as usize)).collect();
+                let next: Vec<Vec3> = vertices
+                    .iter()
+                    .map(|&v| self.umbrella(v as usize))
+                    .collect();
                 for (&v, &x) in vertices.iter().zip(&next) {
                     self.p[v as usize] = x;
                 }
@@ -555,7 +578,10 @@ mod tests {
             p[2] += 0.3 * ((i as f64 * 0.414).fract() - 0.5);
         }
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| {
                 let mut o = out.clone();
                 let r = repair_folds(&m, &mut o, &t);
@@ -567,7 +593,11 @@ mod tests {
         assert_eq!(a, b);
         assert_eq!(ra, rb);
         assert!(ra.before > 0, "{ra:?}");
-        assert_eq!((ra.input, ra.after), (0, 0), "the flat input has no folds: {ra:?}");
+        assert_eq!(
+            (ra.input, ra.after),
+            (0, 0),
+            "the flat input has no folds: {ra:?}"
+        );
         for (i, p) in a.iter().enumerate() {
             if i % 3 == 0 {
                 assert_eq!(*p, m.positions[i], "vertex {i} was not moved by the method");
