@@ -11,7 +11,7 @@
 //! only those methods. A `!` marks more flipped faces than the input.
 
 use normalnet_denoise::{Denoiser, METHODS};
-use normalnet_filters::{FoldCheck, repair_folds};
+use normalnet_filters::{FoldCheck, repair_mesh_folds};
 use normalnet_mesh::metrics::per_face_angle_errors;
 use normalnet_mesh::{Mesh, NoProgress, Topology, geometry::face_normals, read_mesh, vec3};
 
@@ -66,7 +66,7 @@ fn main() {
             let off = d.denoise(&noisy, Some(&clean), &NoProgress).unwrap();
             let t = std::time::Instant::now();
             let mut on = off.clone();
-            repair_folds(&noisy, &mut on.positions, &topology);
+            repair_mesh_folds(&noisy, &mut on.positions);
             let s1 = t.elapsed().as_secs_f64();
             let (f0, g0, e0) = score(&off, &clean, &check);
             let (f1, g1, e1) = score(&on, &clean, &check);

@@ -37,9 +37,9 @@ pub use normalnet_isa as isa;
 pub use params::Params;
 pub use registry::{Kind, METHODS, Method, MethodInfo, Outcome, find, names};
 
-use normalnet_filters::repair_folds;
+use normalnet_filters::repair_mesh_folds;
 use normalnet_mesh::scale::pow2_scaled;
-use normalnet_mesh::{Mesh, Progress, Topology};
+use normalnet_mesh::{Mesh, Progress};
 use serde_json::Value;
 
 /// A denoiser ready to run: a registered method with its parameters
@@ -193,9 +193,11 @@ impl Denoiser {
         progress: &dyn Progress,
     ) -> Result<Outcome, DenoiseError> {
         let mut outcome = self.method.run(mesh, gt, progress)?;
-        if self.repairs_folds() && outcome.mesh.faces == mesh.faces {
-            let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-            outcome.folds = Some(repair_folds(mesh, &mut outcome.mesh.positions, &topology));
+        if self.repairs_folds()
+            && outcome.mesh.faces == mesh.faces
+            && outcome.mesh.num_vertices() == mesh.num_vertices()
+        {
+            outcome.folds = Some(repair_mesh_folds(mesh, &mut outcome.mesh.positions));
         }
         Ok(outcome)
     }

@@ -51,6 +51,7 @@
 //! proportion to the folded faces (sequential, so the result does not
 //! depend on the thread count); nothing when no face is folded.
 
+use normalnet_mesh::outliers::{OutlierParams, outlier_vertices, without_vertices};
 use normalnet_mesh::vec3::{self, Vec3, add, cross, dot, scale, sub};
 use normalnet_mesh::{Mesh, Topology};
 use rayon::prelude::*;
@@ -195,6 +196,40 @@ impl<'a> FoldCheck<'a> {
     pub fn count(&self, positions: &[Vec3]) -> usize {
         self.folded(positions).iter().filter(|&&b| b).count()
     }
+}
+
+/// [`repair_folds`] on `input` without its outlier vertices
+/// (`normalnet_mesh::outliers`, default thresholds), as the methods denoise
+/// it ([`crate::denoise`]): the faces touching an outlier take no part, so
+/// no vertex is pulled towards a stray one. `output` is the method's result
+/// for `input` (same vertices and faces), repaired in place. The one entry
+/// point of `normalnet_denoise::Denoiser::run`.
+///
+/// # Panics
+/// If `output` has another vertex count than `input`.
+pub fn repair_mesh_folds(input: &Mesh, output: &mut [Vec3]) -> FoldReport {
+    assert_eq!(
+        input.positions.len(),
+        output.len(),
+        "one position per vertex"
+    );
+    let outliers = outlier_vertices(input, &OutlierParams::default());
+    let inner = if outliers.count() == 0 {
+        None
+    } else {
+        without_vertices(input, &outliers.mask)
+    };
+    let Some((inner, kept)) = inner else {
+        let topology = Topology::new(input.num_vertices(), &input.faces);
+        return repair_folds(input, output, &topology);
+    };
+    let topology = Topology::new(inner.num_vertices(), &inner.faces);
+    let mut inner_output: Vec<Vec3> = kept.iter().map(|&v| output[v as usize]).collect();
+    let report = repair_folds(&inner, &mut inner_output, &topology);
+    for (&v, &p) in kept.iter().zip(&inner_output) {
+        output[v as usize] = p;
+    }
+    report
 }
 
 /// Repairs the folds of `output` (the positions a method returned for
