@@ -38,6 +38,7 @@ pub use normalnet_isa as isa;
 pub use params::Params;
 pub use registry::{Kind, METHODS, Method, MethodInfo, Outcome, find, names};
 
+use normalnet_filters::repair_mesh_folds;
 use normalnet_mesh::scale::pow2_scaled;
 use normalnet_mesh::{Mesh, Progress};
 use serde_json::Value;
@@ -47,6 +48,7 @@ use serde_json::Value;
 pub struct Denoiser {
     info: &'static MethodInfo,
     method: Box<dyn Method>,
+    fold_repair: bool,
 }
 
 impl std::fmt::Debug for Denoiser {
@@ -54,6 +56,7 @@ impl std::fmt::Debug for Denoiser {
         f.debug_struct("Denoiser")
             .field("method", &self.info.name)
             .field("parameters", &self.parameters())
+            .field("fold_repair", &self.fold_repair)
             .finish()
     }
 }
@@ -69,7 +72,12 @@ impl Denoiser {
         normalnet_isa::from_env()?;
         let info = find(name)?;
         let method = (info.build)(info.name, params)?;
-        Ok(Denoiser { info, method })
+        let fold_repair = method.parameters().get("fold_guard") != Some(&Value::Bool(false));
+        Ok(Denoiser {
+            info,
+            method,
+            fold_repair,
+        })
     }
 
     /// The method called `name` with its default parameters.
@@ -112,6 +120,14 @@ impl Denoiser {
     /// the mesh in that unit, scaled back. A mesh inside the range is
     /// denoised as it is: its results keep their bits.
     ///
+    /// # Folds
+    /// After the method's last vertex update, the folds of its result are
+    /// found and repaired ([`normalnet_filters::fold_repair`], issue 39):
+    /// the result has no more folded faces than the input (faces opposing
+    /// their neighbours or turned far from the input's local orientation;
+    /// the ground truth is not read). Off only with a method's
+    /// `fold_guard = false` or [`Denoiser::with_fold_repair`].
+    ///
     /// # Errors
     /// As [`Denoiser::run`].
     pub fn denoise(
@@ -144,14 +160,46 @@ impl Denoiser {
             });
         }
         let Some(k) = scale::working_exponent(mesh)? else {
-            return self.method.run(mesh, gt, progress);
+            return self.run_and_repair(mesh, gt, progress);
         };
         let scaled = |m: &Mesh| m.with_positions(pow2_scaled(&m.positions, k));
         let gt = gt.map(scaled);
-        let mut outcome = self.method.run(&scaled(mesh), gt.as_ref(), progress)?;
+        let mut outcome = self.run_and_repair(&scaled(mesh), gt.as_ref(), progress)?;
         outcome.mesh = outcome
             .mesh
             .with_positions(pow2_scaled(&outcome.mesh.positions, -k));
+        Ok(outcome)
+    }
+
+    /// Whether [`Denoiser::run`] repairs the folds of the method's result:
+    /// by default unless the method has a `fold_guard` parameter and it is
+    /// off; [`Denoiser::with_fold_repair`] sets it.
+    pub fn repairs_folds(&self) -> bool {
+        self.fold_repair
+    }
+
+    /// This denoiser with the final fold repair on or off (off: the
+    /// method's result as it is, e.g. the paper's pipeline).
+    pub fn with_fold_repair(mut self, on: bool) -> Denoiser {
+        self.fold_repair = on;
+        self
+    }
+
+    /// The method's run, then the fold check and repair of
+    /// [`normalnet_filters::fold_repair`] on its result.
+    fn run_and_repair(
+        &self,
+        mesh: &Mesh,
+        gt: Option<&Mesh>,
+        progress: &dyn Progress,
+    ) -> Result<Outcome, DenoiseError> {
+        let mut outcome = self.method.run(mesh, gt, progress)?;
+        if self.repairs_folds()
+            && outcome.mesh.faces == mesh.faces
+            && outcome.mesh.num_vertices() == mesh.num_vertices()
+        {
+            outcome.folds = Some(repair_mesh_folds(mesh, &mut outcome.mesh.positions));
+        }
         Ok(outcome)
     }
 }

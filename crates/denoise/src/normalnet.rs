@@ -202,6 +202,10 @@ impl Method for NormalNet {
             };
             Ok(normalnet_filters::gnf(&out, &gnf, progress)?)
         })?;
-        Ok(Outcome { mesh, stages })
+        Ok(Outcome {
+            mesh,
+            stages,
+            folds: None,
+        })
     }
 }

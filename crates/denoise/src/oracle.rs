@@ -66,6 +66,7 @@ impl Method for Oracle {
         Ok(Outcome {
             mesh: gt_guided_gnf(mesh, &face_normals(gt), &self.params, progress)?,
             stages: None,
+            folds: None,
         })
     }
 }

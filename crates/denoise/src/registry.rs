@@ -4,7 +4,7 @@
 //! in [`METHODS`].
 
 use normalnet_filters::{
-    BiParams, BnfParams, ClassicalMethod, GnfParams, L0Params, Sun07Params, VtParams,
+    BiParams, BnfParams, ClassicalMethod, FoldReport, GnfParams, L0Params, Sun07Params, VtParams,
 };
 use normalnet_mesh::{Mesh, Progress};
 use normalnet_net::StageTimes;
@@ -82,6 +82,9 @@ pub struct Outcome {
     pub mesh: Mesh,
     /// seconds per stage, for methods that report them (NormalNet)
     pub stages: Option<StageTimes>,
+    /// what the final fold repair found and did ([`crate::Denoiser::run`]
+    /// sets it; `None` when it was off)
+    pub folds: Option<FoldReport>,
 }
 
 /// A built denoiser: parameters resolved and checked, models loaded.
@@ -228,6 +231,7 @@ impl<P: ClassicalMethod> Method for Classical<P> {
         Ok(Outcome {
             mesh: normalnet_filters::denoise(&self.params, mesh, progress)?,
             stages: None,
+            folds: None,
         })
     }
 }

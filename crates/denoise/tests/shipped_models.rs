@@ -76,13 +76,17 @@ fn gnf_after_is_gnf_run_on_normalnets_result() {
     let (_, noisy) = shape();
     let mut p = Params::new();
     p.insert("iterations".into(), 2.into());
+    // the methods' own results: without the fold repair that
+    // `Denoiser::run` applies after each (issue 39)
     let plain = Denoiser::new("normalnet", &p)
         .unwrap()
+        .with_fold_repair(false)
         .denoise(&noisy, None, &NoProgress)
         .unwrap();
     p.insert("gnf_after".into(), 3.into());
     let hybrid = Denoiser::new("normalnet", &p)
         .unwrap()
+        .with_fold_repair(false)
         .denoise(&noisy, None, &NoProgress)
         .unwrap();
     let mut g = Params::new();
@@ -90,6 +94,7 @@ fn gnf_after_is_gnf_run_on_normalnets_result() {
     g.insert("mu_g".into(), 0.35.into());
     let expected = Denoiser::new("gnf", &g)
         .unwrap()
+        .with_fold_repair(false)
         .denoise(&plain, None, &NoProgress)
         .unwrap();
     assert_ne!(hybrid.positions, plain.positions);
@@ -107,9 +112,22 @@ fn int8_is_the_default_and_close_to_f32() {
         if let Some(v) = int8 {
             p.insert("int8".into(), v.into());
         }
-        let d = Denoiser::new("normalnet", &p).unwrap();
+        // the networks' arithmetic alone: the fold repair after the method
+        // (issue 39) can tip a face at the margin one way or the other
+        let d = Denoiser::new("normalnet", &p)
+            .unwrap()
+            .with_fold_repair(false);
         let ran_int8 = d.parameters()["int8"].as_bool().unwrap();
         let out = d.denoise(&noisy, None, &NoProgress).unwrap();
+        let repaired = Denoiser::new("normalnet", &p)
+            .unwrap()
+            .denoise(&noisy, None, &NoProgress)
+            .unwrap();
+        eprintln!(
+            "int8 {int8:?}: E_a {:.4}°, with the fold repair {:.4}°",
+            compare(&clean, &out).unwrap().e_a_deg,
+            compare(&clean, &repaired).unwrap().e_a_deg
+        );
         (ran_int8, compare(&clean, &out).unwrap().e_a_deg, out)
     };
     let (f32_ran, f32_e_a, f32_out) = run(Some(false));

@@ -33,6 +33,10 @@
 //! each) when nothing folds.
 //!
 //! Used by every classical filter of this crate and by NormalNet's inference.
+//! The guard works pass by pass against the filtered normals; after a
+//! method's last pass, `normalnet_denoise::Denoiser::run` also checks the
+//! whole result and repairs what still folded ([`mod@crate::fold_repair`],
+//! issue 39).
 
 use normalnet_mesh::geometry::triangle_centre;
 use normalnet_mesh::vec3::{self, Vec3};

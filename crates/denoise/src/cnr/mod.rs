@@ -201,6 +201,10 @@ impl Method for Cnr {
                 progress,
             ))
         })?;
-        Ok(Outcome { mesh, stages: None })
+        Ok(Outcome {
+            mesh,
+            stages: None,
+            folds: None,
+        })
     }
 }
