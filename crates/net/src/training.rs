@@ -31,7 +31,8 @@ use std::time::Instant;
 use normalnet_filters::{GtGuidedGnfParams, gt_guided_gnf};
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
-use normalnet_mesh::{Mesh, NoProgress, NoiseParams, Progress, Topology, add_noise};
+use normalnet_mesh::noise::add_noise_mixture;
+use normalnet_mesh::{Mesh, NoProgress, NoiseParams, Progress, Topology};
 use normalnet_voxel::{BalancedSampler, Loader, LoaderConfig, SampleSource, VoxelParams};
 use serde::{Deserialize, Serialize};
 
@@ -66,10 +67,28 @@ pub struct SourceSpec {
     /// noisy copies: impulsive, `[L, fraction]`
     #[serde(default)]
     pub impulsive: Vec<[f64; 2]>,
+    /// noisy copies of any kind `normalnet noise` makes: each a list of
+    /// components added in order (scanner-like noise, mixtures; the
+    /// validation suite's `noise` format), e.g.
+    /// `noise = [[{ level = 0.3, direction = "random" }], [{ level = 0.2 },
+    /// { level = 1.0, impulsive_fraction = 0.05 }]]`. A component's `seed`
+    /// is added to the copy's own seed ([`MIXTURE_SEED`]).
+    #[serde(default)]
+    pub noise: Vec<Vec<NoiseParams>>,
     /// regenerate M_k of this mesh with the CNN (else with the oracle)
     #[serde(default)]
     pub regen: bool,
 }
+
+/// Copy `j`'s component `k` of source `i` is seeded with `seed + 1000·i +
+/// MIXTURE_SEED + 10·j + k` plus the component's own `seed` (Gaussian copies
+/// take `1000·i + j`, impulsive ones `1000·i + 500 + j`).
+pub const MIXTURE_SEED: u64 = 800;
+/// Mixture copies per source at most (their seeds stay inside the source's
+/// block of 1000).
+pub const MAX_MIXTURES: usize = 20;
+/// Components per mixture copy at most.
+pub const MAX_COMPONENTS: usize = 10;
 
 /// Everything `normalnet train` needs; `Default` is a small CPU run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -258,8 +277,35 @@ impl TrainConfig {
                     s.mesh
                 )));
             }
-            if s.gaussian.is_empty() && s.impulsive.is_empty() {
+            if s.gaussian.is_empty() && s.impulsive.is_empty() && s.noise.is_empty() {
                 return Err(bad(format!("source {} has no noisy copies", s.mesh)));
+            }
+            if s.noise.len() > MAX_MIXTURES {
+                return Err(bad(format!(
+                    "source {}: {} noise copies, at most {MAX_MIXTURES}",
+                    s.mesh,
+                    s.noise.len()
+                )));
+            }
+            for (j, copy) in s.noise.iter().enumerate() {
+                if copy.is_empty() || copy.len() > MAX_COMPONENTS {
+                    return Err(bad(format!(
+                        "source {}: noise copy {} has {} components (1 to {MAX_COMPONENTS})",
+                        s.mesh,
+                        j + 1,
+                        copy.len()
+                    )));
+                }
+                for (k, c) in copy.iter().enumerate() {
+                    c.validate().map_err(|e| {
+                        bad(format!(
+                            "source {}: noise copy {} component {}: {e}",
+                            s.mesh,
+                            j + 1,
+                            k + 1
+                        ))
+                    })?;
+                }
             }
         }
         Ok(())
@@ -371,30 +417,45 @@ fn make_pairs(
         progress.message(&format!("loading {}", spec.mesh));
         let clean = load_source(config, spec)?;
         let gt = face_normals(&clean);
-        let mut copies: Vec<(String, NoiseParams)> = Vec::new();
+        let mut copies: Vec<(String, Vec<NoiseParams>)> = Vec::new();
         for (j, &l) in spec.gaussian.iter().enumerate() {
             copies.push((
                 format!("{} gaussian L={l}", spec.mesh),
-                NoiseParams {
+                vec![NoiseParams {
                     level: l,
                     seed: seed + 1000 * i as u64 + j as u64,
                     ..NoiseParams::default()
-                },
+                }],
             ));
         }
         for (j, &[l, p]) in spec.impulsive.iter().enumerate() {
             copies.push((
                 format!("{} impulsive L={l} p={p}", spec.mesh),
-                NoiseParams {
+                vec![NoiseParams {
                     level: l,
                     impulsive_fraction: Some(p),
                     seed: seed + 1000 * i as u64 + 500 + j as u64,
                     ..NoiseParams::default()
-                },
+                }],
+            ));
+        }
+        for (j, copy) in spec.noise.iter().enumerate() {
+            let base = seed + 1000 * i as u64 + MIXTURE_SEED + 10 * j as u64;
+            let components: Vec<NoiseParams> = copy
+                .iter()
+                .enumerate()
+                .map(|(k, c)| NoiseParams {
+                    seed: base + k as u64 + c.seed,
+                    ..*c
+                })
+                .collect();
+            copies.push((
+                format!("{} noise {}", spec.mesh, j + 1),
+                components,
             ));
         }
         for (name, noise) in copies {
-            let noisy = add_noise(&clean, &noise)?;
+            let (noisy, _) = add_noise_mixture(&clean, &noise)?;
             pairs.push(Pair {
                 name,
                 clean: clean.clone(),

@@ -13,6 +13,7 @@ fn tiny_training_writes_a_bundle_that_denoises() {
         mesh: format!("shape:{seed}"),
         gaussian: vec![0.4],
         impulsive: vec![],
+        noise: vec![],
         regen,
     };
     let config = TrainConfig {
@@ -68,6 +69,7 @@ fn a_run_stopped_between_networks_resumes() {
         mesh: format!("shape:{seed}"),
         gaussian: vec![0.4],
         impulsive: vec![],
+        noise: vec![],
         regen,
     };
     let mut config = TrainConfig {
@@ -115,6 +117,7 @@ fn test_models_are_refused_as_training_sources() {
             mesh: "gd/Fandisk0.3/Original.obj".into(),
             gaussian: vec![0.3],
             impulsive: vec![],
+            noise: vec![],
             regen: false,
         }],
         ..TrainConfig::default()
@@ -130,6 +133,7 @@ fn a_run_continues_a_bundle_and_counts_its_samples() {
         mesh: format!("shape:{seed}"),
         gaussian: vec![0.4],
         impulsive: vec![],
+        noise: vec![],
         regen,
     };
     let config = TrainConfig {
@@ -255,6 +259,7 @@ fn a_non_positive_voxel_scale_is_refused() {
             mesh: "shape:1".into(),
             gaussian: vec![0.3],
             impulsive: vec![],
+            noise: vec![],
             regen: false,
         }],
         ..TrainConfig::default()

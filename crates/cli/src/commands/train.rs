@@ -50,6 +50,9 @@ pub struct Args {
     /// CNR: cascade stages.
     #[arg(long, default_value_t = 3)]
     pub stages: usize,
+    /// CNR: training faces per stage at most (a seeded subsample of all).
+    #[arg(long, default_value_t = 200_000)]
+    pub max_samples: usize,
 }
 
 /// `normalnet train --method cnr`.
@@ -71,6 +74,7 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
         epochs: args.epochs,
         ring: args.ring,
         stages: args.stages,
+        max_samples: args.max_samples,
         seed: config.seed,
         ..CnrTrainSettings::default()
     };
@@ -78,8 +82,9 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
         || settings.clusters == 0
         || settings.epochs == 0
         || settings.stages == 0
+        || settings.max_samples == 0
     {
-        anyhow::bail!("--hidden, --clusters, --epochs and --stages must be positive");
+        anyhow::bail!("--hidden, --clusters, --epochs, --stages and --max-samples must be positive");
     }
     if !(1..=3).contains(&settings.ring) {
         anyhow::bail!("--ring must be 1, 2 or 3");
