@@ -30,8 +30,8 @@ use std::time::Instant;
 
 use normalnet_filters::{GtGuidedGnfParams, gt_guided_gnf};
 use normalnet_mesh::geometry::face_normals;
-use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::noise::add_noise_mixture;
+use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Mesh, NoProgress, NoiseParams, Progress, Topology};
 use normalnet_voxel::{BalancedSampler, Loader, LoaderConfig, SampleSource, VoxelParams};
 use serde::{Deserialize, Serialize};
@@ -449,10 +449,7 @@ fn make_pairs(
                     ..*c
                 })
                 .collect();
-            copies.push((
-                format!("{} noise {}", spec.mesh, j + 1),
-                components,
-            ));
+            copies.push((format!("{} noise {}", spec.mesh, j + 1), components));
         }
         for (name, noise) in copies {
             let (noisy, _) = add_noise_mixture(&clean, &noise)?;

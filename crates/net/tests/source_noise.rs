@@ -49,9 +49,15 @@ fn mixture_copies_use_the_documented_seeds_and_leave_gaussian_copies_alone() {
     assert_eq!(pairs[0].2.positions, plain[0].2.positions);
     // copy j, component k: seed + MIXTURE_SEED + 10 j + k + its own seed
     let base = seed + MIXTURE_SEED;
-    let first = add_noise_mixture(clean, &[NoiseParams { seed: base, ..random }])
-        .unwrap()
-        .0;
+    let first = add_noise_mixture(
+        clean,
+        &[NoiseParams {
+            seed: base,
+            ..random
+        }],
+    )
+    .unwrap()
+    .0;
     assert_eq!(pairs[1].2.positions, first.positions);
     let second = add_noise_mixture(
         clean,
@@ -94,5 +100,8 @@ fn bad_noise_lists_are_refused_naming_the_source() {
     // and TOML reads the suite's component format
     let text = "[[sources]]\nmesh = \"shape:5\"\nnoise = [[{ level = 0.2, direction = \"view\", depth_gain = 2.0 }]]\n";
     let parsed: TrainConfig = toml::from_str(text).unwrap();
-    assert_eq!(parsed.sources[0].noise[0][0].direction, NoiseDirection::View);
+    assert_eq!(
+        parsed.sources[0].noise[0][0].direction,
+        NoiseDirection::View
+    );
 }

@@ -84,7 +84,9 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
         || settings.stages == 0
         || settings.max_samples == 0
     {
-        anyhow::bail!("--hidden, --clusters, --epochs, --stages and --max-samples must be positive");
+        anyhow::bail!(
+            "--hidden, --clusters, --epochs, --stages and --max-samples must be positive"
+        );
     }
     if !(1..=3).contains(&settings.ring) {
         anyhow::bail!("--ring must be 1, 2 or 3");
