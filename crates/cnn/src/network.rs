@@ -45,7 +45,64 @@ impl FoldedLinear {
             // SAFETY: a path runs only where the CPU has its features.
             return unsafe { self.run_avx512(x, out) };
         }
+        #[cfg(target_arch = "x86_64")]
+        if isa.has_avx2() {
+            // SAFETY: as above.
+            return unsafe { self.run_avx2(x, out) };
+        }
         self.run_plain(x, out);
+    }
+
+    /// The inputs of each block of [`SAMPLES`] samples that not all its
+    /// samples have zero (the others add nothing).
+    fn used_inputs(x: &[f32], ni: usize) -> Vec<Vec<usize>> {
+        x.chunks_exact(SAMPLES * ni)
+            .map(|x| {
+                (0..ni)
+                    .filter(|&i| (0..SAMPLES).any(|s| x[s * ni + i] != 0.0))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// [`Self::run_avx512`] for 8-wide vectors: blocks of [`SAMPLES`]
+    /// samples × 8 outputs summed in registers (8 accumulators, the weight
+    /// vector and the broadcast input of the 16 registers), the same
+    /// products in the same order as `run_plain`: the same values.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_avx2(&self, x: &[f32], out: &mut [f32]) {
+        use std::arch::x86_64::*;
+        let no = self.outputs;
+        let ni = self.w.len() / no;
+        if !no.is_multiple_of(8) {
+            return self.run_plain(x, out);
+        }
+        let blocks = x.len() / (SAMPLES * ni);
+        let used = Self::used_inputs(x, ni);
+        for ob in (0..no).step_by(8) {
+            for (bi, used) in used.iter().enumerate() {
+                let x = &x[bi * SAMPLES * ni..(bi + 1) * SAMPLES * ni];
+                let out = &mut out[bi * SAMPLES * no..(bi + 1) * SAMPLES * no];
+                // SAFETY (all loads and stores): ob + 8 ≤ no; rows of `no`
+                // weights, samples of `ni` inputs and `no` outputs.
+                unsafe {
+                    let mut acc = [_mm256_loadu_ps(self.b.as_ptr().add(ob)); SAMPLES];
+                    for &i in used {
+                        let w = _mm256_loadu_ps(self.w.as_ptr().add(i * no + ob));
+                        for (s, a) in acc.iter_mut().enumerate() {
+                            let xv = _mm256_set1_ps(*x.get_unchecked(s * ni + i));
+                            *a = _mm256_add_ps(*a, _mm256_mul_ps(xv, w));
+                        }
+                    }
+                    for (s, a) in acc.iter().enumerate() {
+                        _mm256_storeu_ps(out.as_mut_ptr().add(s * no + ob), *a);
+                    }
+                }
+            }
+        }
+        let done = blocks * SAMPLES;
+        self.run_plain(&x[done * ni..], &mut out[done * no..]);
     }
 
     /// [`Self::run_plain`] for 16-wide vectors: blocks of [`SAMPLES`]
@@ -66,16 +123,7 @@ impl FoldedLinear {
             return self.run_plain(x, out);
         }
         let blocks = x.len() / (SAMPLES * ni);
-        // per block, the inputs not all its samples have zero (the others
-        // add nothing)
-        let used: Vec<Vec<usize>> = x
-            .chunks_exact(SAMPLES * ni)
-            .map(|x| {
-                (0..ni)
-                    .filter(|&i| (0..SAMPLES).any(|s| x[s * ni + i] != 0.0))
-                    .collect()
-            })
-            .collect();
+        let used = Self::used_inputs(x, ni);
         // output blocks outer: a block's weight columns stay in cache
         // across the sample blocks
         for ob in (0..no).step_by(16 * R) {
@@ -155,7 +203,8 @@ pub enum Precision {
     #[default]
     F32,
     /// 8-bit inputs and weights, exact i32 sums, f32 scale, bias and ReLU
-    /// (AVX-512 VNNI; about 1 % of a layer's output range per value). The
+    /// (AVX-512 VNNI, or AVX2 with the same sums; about 1 % of a layer's
+    /// output range per value). The
     /// stem stays f32 unless [`Cnn::set_int8_stem`] asks for the row stem in
     /// int8, the 1³ shortcuts unless [`Cnn::set_int8_shortcut`] asks for
     /// them; the fully connected layers stay f32.
@@ -426,7 +475,7 @@ impl Cnn {
     }
 
     /// Chooses the arithmetic of the residual blocks' 3³ convolutions and
-    /// returns the one in effect: [`Precision::Int8`] needs AVX-512 VNNI and
+    /// returns the one in effect: [`Precision::Int8`] needs AVX-512 VNNI or AVX2 and
     /// channel counts the kernel handles (inputs a multiple of 4, outputs 16
     /// to 256); otherwise the network stays [`Precision::F32`].
     pub fn set_precision(&mut self, precision: Precision) -> Precision {
@@ -460,12 +509,9 @@ impl Cnn {
     }
 
     fn runs_int8_stem(&self) -> bool {
-        // the int8 row stem is VNNI code (the blocks also run on AVX2)
-        self.int8_stem
-            && self.int8
-            && self.row_stem
-            && self.isa.has_vnni()
-            && self.stem_int8.is_some()
+        // VNNI code, or AVX2's `vpmaddwd` with the same sums (int8
+        // precision means a path with one of them)
+        self.int8_stem && self.int8 && self.row_stem && self.stem_int8.is_some()
     }
 
     /// With [`Precision::Int8`], whether the residual blocks' 1³ shortcuts
@@ -482,13 +528,14 @@ impl Cnn {
     }
 
     /// Chooses how the stem runs: as 1D convolutions along the grid rows
-    /// (AVX-512, 3 → 16 channels: the lite stem; the default where it
-    /// applies) or as the scatter of occupied cubes (everywhere else). Both
-    /// compute the same convolution up to f32 rounding; returns the form in
-    /// effect (true: rows). For benchmarks and cross-checks.
+    /// (AVX-512 or AVX2, 3 → 16 channels: the lite stem; the default where
+    /// it applies) or as the scatter of occupied cubes (everywhere else).
+    /// Both compute the same convolution up to f32 rounding; returns the
+    /// form in effect (true: rows). For benchmarks and cross-checks.
     pub fn set_row_stem(&mut self, rows: bool) -> bool {
-        self.row_stem =
-            rows && self.level == Level::Avx512 && stem_rows::serves(&self.stem, self.grid);
+        self.row_stem = rows
+            && matches!(self.level, Level::Avx512 | Level::Avx2)
+            && stem_rows::serves(&self.stem, self.grid);
         self.row_stem
     }
 
@@ -702,19 +749,35 @@ impl Cnn {
                 s.rows
                     .build(&s.occupied, [self.grid, self.stem.pad, n], !int8);
                 let near = sparse.then_some(&mut s.near);
+                let (p, g) = (self.stem.pad, self.grid);
                 match &self.stem_int8 {
                     Some(q) if int8 => {
                         let scale = s.rows.quantize(&s.occupied);
-                        let (p, g) = (self.stem.pad, self.grid);
-                        // SAFETY: int8 precision means `conv_int8::supported` on this network's path
-                        // (F, BW, VNNI); `set_row_stem` checked `serves`.
-                        stem_max = Some(unsafe {
-                            stem_rows::run_int8(q, p, &s.rows, scale, g, stem_out, true, near)
+                        // SAFETY (both): int8 precision means
+                        // `conv_int8::supported` on this network's path (VNNI
+                        // with F and BW, or AVX2 and FMA); `set_row_stem`
+                        // checked `serves`.
+                        stem_max = Some(match self.isa.has_vnni() {
+                            true => unsafe {
+                                stem_rows::run_int8(q, p, &s.rows, scale, g, stem_out, true, near)
+                            },
+                            false => unsafe {
+                                s.rows.widen();
+                                stem_rows::avx2::run_int8(
+                                    q, p, &s.rows, scale, g, stem_out, true, near,
+                                )
+                            },
                         });
                     }
-                    // SAFETY: `set_row_stem` checked AVX-512F and `serves`.
-                    _ => unsafe {
-                        stem_rows::run(&self.stem, &s.rows, self.grid, stem_out, true, near)
+                    // SAFETY (both): `set_row_stem` checked the level (AVX-512F, or AVX2 and
+                    // FMA) and `serves`.
+                    _ => match self.level {
+                        Level::Avx512 => unsafe {
+                            stem_rows::run(&self.stem, &s.rows, g, stem_out, true, near)
+                        },
+                        _ => unsafe {
+                            stem_rows::avx2::run(&self.stem, &s.rows, g, stem_out, true, near)
+                        },
                     },
                 }
             }

@@ -172,6 +172,8 @@ fn the_profiled_forward_gives_the_same_outputs_and_times_every_layer() {
     ));
 }
 
+/// On every path this CPU runs: the row stem (AVX-512 and AVX2) equals
+/// the scatter up to f32 rounding; the scalar path has only the scatter.
 #[test]
 fn the_row_stem_equals_the_scatter() {
     let w = common::random_net(3, 21, [16, 32, 64]);
@@ -180,69 +182,94 @@ fn the_row_stem_equals_the_scatter() {
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(300 + i as u64, 21))
         .collect();
-    let mut rows = vec![0.0f32; batch * 18];
-    let mut scatter = rows.clone();
-    let available = cnn.set_row_stem(true);
-    cnn.forward(&grids, &mut rows).unwrap();
-    assert!(!cnn.set_row_stem(false));
-    cnn.forward(&grids, &mut scatter).unwrap();
-    if !available {
-        eprintln!(
-            "row stem not available ({}): scatter only",
-            cnn.instruction_set()
-        );
-        assert_eq!(rows, scatter);
-        return;
+    for isa in Isa::all_here() {
+        cnn.set_isa(isa).unwrap();
+        let mut rows = vec![0.0f32; batch * 18];
+        let mut scatter = rows.clone();
+        let available = cnn.set_row_stem(true);
+        assert_eq!(available, isa >= Isa::Avx2, "{isa}: row stem");
+        cnn.forward(&grids, &mut rows).unwrap();
+        assert!(!cnn.set_row_stem(false));
+        cnn.forward(&grids, &mut scatter).unwrap();
+        if !available {
+            assert_eq!(rows, scatter);
+            continue;
+        }
+        let worst = rows
+            .iter()
+            .zip(&scatter)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        println!("{isa}: row stem vs scatter: largest output difference {worst:e}");
+        assert!(worst < 1e-5, "{isa}: row stem off by {worst}");
     }
-    let worst = rows
-        .iter()
-        .zip(&scatter)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0f32, f32::max);
-    println!("row stem vs scatter: largest output difference {worst:e}");
-    assert!(worst < 1e-5, "row stem off by {worst}");
 }
 
+/// The int8 stem, on every path with int8 kernels (VNNI, and AVX2's exact
+/// `vpmaddwd` sums on the others): the same outputs on each, near the
+/// reference, off with the row stem off.
 #[test]
 fn the_int8_stem_is_opt_in_and_near_the_reference() {
-    let Some(mut cnn) = int8_option_near_the_reference(5, "stem", |cnn, on| {
-        cnn.set_row_stem(true);
-        cnn.set_int8_stem(on)
-    }) else {
-        return;
-    };
-    // the row stem off: the scatter stem in f32
-    assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
+    let mut outputs: Vec<(Isa, Vec<f32>)> = Vec::new();
+    for isa in Isa::all_here().filter(|isa| isa.has_avx2()) {
+        let Some((mut cnn, out)) = int8_option_near_the_reference(5, "stem", isa, |cnn, on| {
+            cnn.set_row_stem(true);
+            cnn.set_int8_stem(on)
+        }) else {
+            return;
+        };
+        // the row stem off: the scatter stem in f32
+        assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
+        outputs.push((isa, out));
+    }
+    // the int8 stem and blocks give the same i32 sums on every path; the
+    // rest (the head, f32) sums in each path's order
+    for pair in outputs.windows(2) {
+        let worst = pair[0]
+            .1
+            .iter()
+            .zip(&pair[1].1)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        println!("int8 stem, {} vs {}: {worst:e}", pair[0].0, pair[1].0);
+        assert!(worst < 1e-5, "{} vs {}: {worst}", pair[0].0, pair[1].0);
+    }
 }
 
 #[test]
 fn the_int8_shortcuts_run_only_with_int8_and_stay_near_the_reference() {
-    let Some(mut cnn) = int8_option_near_the_reference(6, "shortcuts", Cnn::set_int8_shortcut)
-    else {
-        return;
-    };
-    cnn.set_precision(Precision::F32);
-    assert!(!cnn.set_int8_shortcut(true), "f32 precision again");
+    for isa in Isa::all_here().filter(|isa| isa.has_avx2()) {
+        let Some((mut cnn, _)) =
+            int8_option_near_the_reference(6, "shortcuts", isa, Cnn::set_int8_shortcut)
+        else {
+            return;
+        };
+        cnn.set_precision(Precision::F32);
+        assert!(!cnn.set_int8_shortcut(true), "f32 precision again");
+    }
 }
 
 /// An int8 option (`set(cnn, on)`, returning whether it is in effect)
-/// does nothing with f32 precision; with int8 it changes the outputs and
-/// keeps them within [`INT8_TOLERANCE`] of the f64 reference. Returns the
-/// network with int8 and the option on, or `None` on a CPU without VNNI.
+/// does nothing with f32 precision; with int8 on path `isa` it changes the
+/// outputs and keeps them within [`INT8_TOLERANCE`] of the f64 reference.
+/// Returns the network with int8 and the option on and its outputs, or
+/// `None` on a CPU without int8 kernels.
 fn int8_option_near_the_reference(
     seed: u64,
     what: &str,
+    isa: Isa,
     set: impl Fn(&mut Cnn, bool) -> bool,
-) -> Option<Cnn> {
+) -> Option<(Cnn, Vec<f32>)> {
     let (grid, batch) = (21, 6);
     let w = common::random_net(seed, grid, [16, 32, 64]);
     let mut cnn = Cnn::new(&w).unwrap();
+    cnn.set_isa(isa).unwrap();
     assert!(!set(&mut cnn, true), "int8 {what} not with f32 precision");
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(100 * seed + i as u64, grid))
         .collect();
     if cnn.set_precision(Precision::Int8) != Precision::Int8 || !set(&mut cnn, true) {
-        eprintln!("no AVX-512 VNNI on this CPU: no int8 {what} (checked), rest skipped");
+        eprintln!("no int8 kernels on {isa}: no int8 {what} (checked), rest skipped");
         return None;
     }
     let mut without = vec![0.0f32; batch * 18];
@@ -253,9 +280,9 @@ fn int8_option_near_the_reference(
     cnn.forward(&grids, &mut out).unwrap();
     assert_ne!(out, without, "the int8 {what} did not run");
     let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
-    println!("int8 with the int8 {what} vs f64: largest output difference {worst:e}");
-    assert!(worst < INT8_TOLERANCE, "int8 {what} off by {worst}");
-    Some(cnn)
+    println!("{isa}: int8 with the int8 {what} vs f64: largest output difference {worst:e}");
+    assert!(worst < INT8_TOLERANCE, "{isa}: int8 {what} off by {worst}");
+    Some((cnn, out))
 }
 
 #[test]
@@ -302,7 +329,10 @@ fn a_sample_gives_the_same_outputs_in_any_batch() {
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(950 + i as u64, grid))
         .collect();
-    for precision in [Precision::F32, Precision::Int8] {
+    for (isa, precision) in
+        Isa::all_here().flat_map(|isa| [(isa, Precision::F32), (isa, Precision::Int8)])
+    {
+        cnn.set_isa(isa).unwrap();
         cnn.set_precision(precision);
         let mut all = vec![0.0f32; batch * 18];
         cnn.forward(&grids, &mut all).unwrap();
@@ -310,7 +340,11 @@ fn a_sample_gives_the_same_outputs_in_any_batch() {
             let mut one = vec![0.0f32; 18];
             cnn.forward(grid, &mut one).unwrap();
             // == : the same values (an exact zero may differ in sign)
-            assert_eq!(one, all[b * 18..(b + 1) * 18], "{precision:?} sample {b}");
+            assert_eq!(
+                one,
+                all[b * 18..(b + 1) * 18],
+                "{isa} {precision:?} sample {b}"
+            );
         }
     }
 }

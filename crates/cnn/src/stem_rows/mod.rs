@@ -20,6 +20,15 @@
 //! order); a test checks it. The int8 version ([`run_int8`]) reads each
 //! output cube's W window as 15 packed bytes (four `vpdpbusd` per cube and
 //! input row) in tiles of up to 12 cubes over that span.
+//!
+//! [`avx2`] has both stems for AVX2 (no AVX-512): the f32 stem in two
+//! halves of 8 output channels (the same multiply-adds per lane in the same
+//! order, so the same outputs as [`run`]), the int8 stem with `vpmaddwd` on
+//! the bytes widened to i16 (exact i32 sums: the same outputs as
+//! [`run_int8`], bit for bit).
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod avx2;
 
 use crate::conv::{CubeMask, FoldedConv};
 use crate::sparse_conv::Occupied;
@@ -49,6 +58,9 @@ pub(crate) struct Rows {
     /// `len` cubes of three bytes, channel value / scale + 128 (empty and
     /// padding cubes 128), then [`SLACK`] bytes after the last row
     bytes: Vec<u8>,
+    /// `bytes` widened to i16 for the AVX2 int8 stem (after
+    /// [`Rows::widen`])
+    wide: Vec<i16>,
     /// per occupied cube: its cube in the row buffers
     cubes: Vec<u32>,
     len: usize,
@@ -124,6 +136,13 @@ impl Rows {
         }
         scale
     }
+
+    /// [`Rows::quantize`]'s bytes (slack included) as i16, for
+    /// [`avx2::run_int8`].
+    pub(crate) fn widen(&mut self) {
+        self.wide.clear();
+        self.wide.extend(self.bytes.iter().map(|&b| i16::from(b)));
+    }
 }
 
 /// The (W row, column) of each cube of an `n³` grid in `index` (ascending,
@@ -181,6 +200,10 @@ pub(crate) struct Int8Stem {
     /// bytes — what the +128 offset of the inputs adds to a sum over one row
     offset: Vec<i32>,
     bias: Vec<f32>,
+    /// the same weights as i16 pairs for [`avx2::run_int8`]: per (kd, kh),
+    /// the window's bytes `2g` and `2g + 1` for each output channel,
+    /// `[kd·K + kh][WINDOW / 2][co][2]`
+    w16: Vec<i16>,
 }
 
 impl Int8Stem {
@@ -205,11 +228,24 @@ impl Int8Stem {
                 }
             }
         }
+        let w16 = (0..K * K * WINDOW * CO)
+            .map(|i| {
+                let (row, g, co, half) = (
+                    i / (WINDOW * CO),
+                    i / (2 * CO) % (WINDOW / 2),
+                    i / 2 % CO,
+                    i % 2,
+                );
+                let byte = 2 * g + half;
+                i16::from(w[((row * WINDOW / 4 + byte / 4) * CO + co) * 4 + byte % 4])
+            })
+            .collect();
         Some(Int8Stem {
             w,
             scale,
             offset,
             bias: c.b.clone(),
+            w16,
         })
     }
 
@@ -326,6 +362,14 @@ fn for_each_span(
         }
     }
     any_background
+}
+
+/// `max(bias, floor)` per output channel, with the ReLU's floor (0, or −∞
+/// without it): the output of a cube no occupied cube reaches. The max as
+/// `maxps` takes it: the floor unless the bias is greater.
+fn background(bias: &[f32], relu: bool) -> [f32; CO] {
+    let floor = if relu { 0.0 } else { f32::NEG_INFINITY };
+    std::array::from_fn(|co| if bias[co] > floor { bias[co] } else { floor })
 }
 
 /// The ReLU's floor (0, or −∞ without it) and `max(bias, floor)` as an
@@ -703,6 +747,127 @@ mod tests {
                 }
                 // inputs in ±0.5, weights in ±0.5, up to 375 products
                 assert!(worst > 0.0 && worst < 0.05, "n {n}: int8 vs f32 {worst}");
+            }
+        }
+    }
+
+    /// The AVX2 f32 stem does per lane what the AVX-512 one does: equal to
+    /// it bit for bit, and to the scatter up to f32 rounding.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn avx2_rows_equal_the_avx512_rows_and_the_scatter() {
+        let isa = normalnet_isa::Isa::detected();
+        if !isa.has_avx2() {
+            eprintln!("skipped: no AVX2 on this CPU");
+            return;
+        }
+        for n in SIDES {
+            let (c, occ, rows, m) = stem_and_grid(n);
+            let mut want_near = CubeMask::default();
+            c.reach_mask(&occ, n, &mut want_near);
+            for relu in [false, true] {
+                let mut want = vec![f32::NAN; m * m * m * 16];
+                c.run_sparse(Level::Scalar, &occ, n, &mut want, relu);
+                let mut got = vec![f32::NAN; m * m * m * 16];
+                let mut near = CubeMask::from_flags(&[true; 8], 2);
+                // SAFETY: AVX2 and FMA detected above; `serves` holds.
+                unsafe { avx2::run(&c, &rows, n, &mut got, relu, Some(&mut near)) };
+                assert_eq!(near, want_near, "n {n}: near cubes");
+                for (g, w) in got.iter().zip(&want) {
+                    assert!((g - w).abs() < 1e-5, "n {n}: {g} vs {w}");
+                }
+                if isa.has_avx512() {
+                    let mut wide = vec![f32::NAN; m * m * m * 16];
+                    // SAFETY: AVX-512F detected.
+                    unsafe { run(&c, &rows, n, &mut wide, relu, None) };
+                    assert!(
+                        got.iter()
+                            .zip(&wide)
+                            .all(|(g, w)| g.to_bits() == w.to_bits()),
+                        "n {n}: AVX2 and AVX-512 rows differ"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The int8 stem on AVX2 gives the exact integer sums: every output
+    /// equals the scalar computation from the bytes (i32 sums, one fused
+    /// multiply-add, the floor) bit for bit, and so VNNI's where the CPU
+    /// has it; its largest output is the largest of `out`.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn int8_rows_on_avx2_give_the_exact_integer_sums() {
+        let isa = normalnet_isa::Isa::detected();
+        if !isa.has_avx2() {
+            eprintln!("skipped: no AVX2 on this CPU");
+            return;
+        }
+        for n in SIDES {
+            let (c, occ, mut rows, m) = stem_and_grid(n);
+            let s = rows.quantize(&occ);
+            rows.widen();
+            let q = Int8Stem::new(&c).expect("a 3 → 16 stem");
+            for relu in [false, true] {
+                let floor = if relu { 0.0 } else { f32::NEG_INFINITY };
+                let mut want = vec![f32::NAN; m * m * m * 16];
+                for (cube, out) in want.chunks_exact_mut(CO).enumerate() {
+                    let (od, oh, ow) = (cube / (m * m), cube / m % m, cube % m);
+                    let mut sums = [0i32; CO];
+                    for kd in 0..K {
+                        for kh in 0..K {
+                            let (Some(id), Some(ih)) =
+                                ((od + kd).checked_sub(c.pad), (oh + kh).checked_sub(c.pad))
+                            else {
+                                continue;
+                            };
+                            if id >= n || ih >= n || rows.slot[id * n + ih] == EMPTY {
+                                continue;
+                            }
+                            let x0 = rows.slot[id * n + ih] as usize * rows.len;
+                            for kw in 0..K {
+                                for ci in 0..CIN {
+                                    let b = i32::from(rows.bytes[(x0 + ow + kw) * CIN + ci]);
+                                    for (co, sum) in sums.iter_mut().enumerate() {
+                                        let tap = (kd * K + kh) * K + kw;
+                                        *sum += (b - 128) * i32::from(q.weight(tap, ci, co));
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    for (co, o) in out.iter_mut().enumerate() {
+                        let v = (sums[co] as f32).mul_add(q.scale[co] * s, q.bias[co]);
+                        *o = if v > floor { v } else { floor };
+                    }
+                }
+                let mut got = vec![f32::NAN; m * m * m * 16];
+                let mut want_near = CubeMask::default();
+                c.reach_mask(&occ, n, &mut want_near);
+                let mut near = CubeMask::from_flags(&[true; 8], 2);
+                // SAFETY: AVX2 and FMA detected above; `serves` holds.
+                let largest = unsafe {
+                    avx2::run_int8(&q, c.pad, &rows, s, n, &mut got, relu, Some(&mut near))
+                };
+                assert_eq!(near, want_near, "n {n}: near cubes");
+                for (g, w) in got.iter().zip(&want) {
+                    assert_eq!(g.to_bits(), w.to_bits(), "n {n}: {g} vs {w}");
+                }
+                assert_eq!(
+                    largest,
+                    got.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b))
+                );
+                if isa.has_vnni() {
+                    let mut vnni = vec![f32::NAN; m * m * m * 16];
+                    // SAFETY: VNNI (with F and BW) detected.
+                    let top = unsafe { run_int8(&q, c.pad, &rows, s, n, &mut vnni, relu, None) };
+                    assert!(
+                        got.iter()
+                            .zip(&vnni)
+                            .all(|(g, v)| g.to_bits() == v.to_bits())
+                    );
+                    assert_eq!(top, largest);
+                }
             }
         }
     }
