@@ -170,7 +170,7 @@ pub(crate) unsafe fn run_int8(
                         $($t => unsafe {
                             stem_tile::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
                         },)*
-                        _ => unreachable!("tiles of 1 to 6 cubes"),
+                        _ => unreachable!("tiles of 1 to MAX_TILE cubes"),
                     }
                 };
             }
