@@ -1,7 +1,7 @@
 //! NormalNet inference speed (issue 12): face-passes per second of the whole
 //! pipeline, and of its two stages run one after the other (voxelizer, CNN),
 //! on Fandisk0.3 (when ../shared/data is present) and on a generated noisy
-//! 100k-face shape, with the f32 and (where the CPU has VNNI) int8 engines;
+//! 100k-face shape, with the f32 and (where the CPU has AVX2 or VNNI) int8 engines;
 //! then the denoising of Fandisk0.3 end to end: the defaults (int8, freeze
 //! 0.5, flat skip 15°) and the shortcuts off. With `NORMALNET_TORCH_PYTHON` set
 //! to a Python that has torch, the same lite network in PyTorch CPU f32

@@ -101,7 +101,7 @@ fn gnf_after_is_gnf_run_on_normalnets_result() {
     assert_eq!(hybrid.positions, expected.positions);
 }
 
-/// int8 residual blocks (the default where the CPU has AVX-512 VNNI) give
+/// int8 residual blocks (the default where the CPU has AVX2 or AVX-512 VNNI) give
 /// nearly the f32 result, and `parameters` says which arithmetic ran.
 #[test]
 fn int8_is_the_default_and_close_to_f32() {
