@@ -50,6 +50,8 @@ impl FoldedLinear {
             // SAFETY: as above.
             return unsafe { self.run_avx2(x, out) };
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = isa; // one path: the plain code
         self.run_plain(x, out);
     }
 
@@ -741,7 +743,7 @@ impl Cnn {
         let mut c = self.stem.cout;
         let stem_out = &mut s.x[..n * n * n * c];
         // the stem's largest output, where the stem tells it
-        let mut stem_max = None;
+        let mut stem_max: Option<f32> = None;
         match self.row_stem {
             #[cfg(target_arch = "x86_64")]
             true => {

@@ -4,7 +4,9 @@
 //! occupied input cube adds its contribution to the `k³` outputs it reaches.
 //! Stride 1 only (the stem of SPEC §6).
 
-use crate::conv::{CubeMask, FoldedConv, Fused, Level, MulAdd, Plain};
+#[cfg(target_arch = "x86_64")]
+use crate::conv::Fused;
+use crate::conv::{CubeMask, FoldedConv, Level, MulAdd, Plain};
 
 /// Occupied cubes of a `[cin, n, n, n]` channel-major grid: flat cube indices
 /// and their `cin` values, channels-last.

@@ -8,7 +8,9 @@
 //!
 //! Same instruction-set dispatch as the forward kernels (`crate::conv`).
 
-use crate::conv::{Fused, Level, MulAdd, Plain};
+#[cfg(target_arch = "x86_64")]
+use crate::conv::Fused;
+use crate::conv::{Level, MulAdd, Plain};
 use crate::sparse_conv::{Occupied, reach};
 
 /// Shape of one convolution: kernel side, stride, padding, channels.
