@@ -222,8 +222,10 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
         assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
         outputs.push((isa, out));
     }
-    // the int8 stem and blocks give the same i32 sums on every path; the
-    // rest (the head, f32) sums in each path's order
+    // the int8 stem and blocks give the same i32 sums on every path, but
+    // the f32 shortcuts (each path's summation order) can move a value
+    // across a byte's rounding boundary in the next block: the paths agree
+    // to the quantization tolerance
     for pair in outputs.windows(2) {
         let worst = pair[0]
             .1
@@ -232,7 +234,12 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0f32, f32::max);
         println!("int8 stem, {} vs {}: {worst:e}", pair[0].0, pair[1].0);
-        assert!(worst < 1e-5, "{} vs {}: {worst}", pair[0].0, pair[1].0);
+        assert!(
+            f64::from(worst) < INT8_TOLERANCE,
+            "{} vs {}: {worst}",
+            pair[0].0,
+            pair[1].0
+        );
     }
 }
 
