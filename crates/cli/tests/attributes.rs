@@ -143,3 +143,91 @@ fn denoise_batch_and_noise_keep_the_inputs_attributes() {
     );
     assert!(text.contains(" 24\n4 0 1 8 7\n"), "{text}");
 }
+
+/// Pixels of a picture that are clearly red, blue and green: their counts
+/// and mean (column, row).
+fn colour_pixels(png: &std::path::Path) -> [(usize, [f64; 2]); 3] {
+    let image = normalnet_render::Image::decode_png(&std::fs::read(png).unwrap()).unwrap();
+    let mut found = [(0, [0.0, 0.0]); 3];
+    for y in 0..image.height() {
+        for x in 0..image.width() {
+            let [r, g, b] = image.get(x, y).unwrap().map(i32::from);
+            for (k, strong) in [r, b, g].into_iter().enumerate() {
+                let others = r + g + b - strong;
+                if strong > 120 && 2 * strong > others + 80 {
+                    found[k].0 += 1;
+                    found[k].1[0] += x as f64;
+                    found[k].1[1] += y as f64;
+                }
+            }
+        }
+    }
+    found.map(|(n, sum)| (n, sum.map(|c| c / n.max(1) as f64)))
+}
+
+/// Issue 38: a textured OBJ, denoised, is drawn by `render` with its
+/// texture in place (the denoised file keeps `vt`, corner indices and its
+/// `mtllib`, rewritten to reach the input's library from the output folder)
+/// and its materials' colours; `--no-texture` and a missing image draw the
+/// base colour.
+#[test]
+fn render_draws_a_denoised_obj_with_its_texture_and_material_colours() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (input_dir, output_dir) = (tmp.path().join("in"), tmp.path().join("out"));
+    std::fs::create_dir_all(&input_dir).unwrap();
+    std::fs::create_dir_all(&output_dir).unwrap();
+    // left half red, right half blue; the second material plain green
+    let mut texture = normalnet_render::Image::new(16, 16, [230, 20, 20]);
+    texture.fill_rect(8, 0, 8, 16, [20, 20, 230]);
+    texture.write_png(input_dir.join("halves.png")).unwrap();
+    std::fs::write(
+        input_dir.join("plate.mtl"),
+        "newmtl m0\nmap_Kd halves.png\nnewmtl m3\nKd 0.1 0.9 0.1\n",
+    )
+    .unwrap();
+    let input = input_dir.join("plate.obj");
+    std::fs::write(&input, quad_plate()).unwrap();
+    let output = output_dir.join("plate.obj");
+    let out = normalnet(&["-q", "denoise", s(&input), s(&output), "-m", "gnf"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    let picture = |name: &str, extra: &[&str]| {
+        let png = tmp.path().join(name);
+        let mut args = vec![
+            "-q",
+            "render",
+            s(&output),
+            "-o",
+            s(&png),
+            "--size",
+            "300x300",
+        ];
+        args.extend_from_slice(extra);
+        let out = normalnet(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        (colour_pixels(&png), stderr(&out))
+    };
+    // face-on (eye on +z): x to the right, y up. Rows y 0..3 of the plate
+    // use the texture (u = x / 6: red left, blue right), rows 3..6 green.
+    let ([(red, at_red), (blue, at_blue), (green, at_green)], _) =
+        picture("textured.png", &["--view", "0,0"]);
+    assert!(
+        red > 5000 && blue > 5000 && green > 10000,
+        "{red} {blue} {green}"
+    );
+    assert!(
+        at_red[0] + 50.0 < at_blue[0],
+        "red {at_red:?} left of blue {at_blue:?}"
+    );
+    assert!(
+        at_green[1] + 50.0 < at_red[1],
+        "green {at_green:?} above red {at_red:?}"
+    );
+    let plain = |found: [(usize, [f64; 2]); 3]| found.map(|(n, _)| n);
+    let (found, _) = picture("plain.png", &["--no-texture"]);
+    assert_eq!(plain(found), [0, 0, 0]);
+    std::fs::remove_file(input_dir.join("halves.png")).unwrap();
+    let (found, warning) = picture("missing.png", &[]);
+    assert_eq!(plain(found), [0, 0, 0]);
+    assert!(warning.contains("halves.png"), "{warning}");
+}

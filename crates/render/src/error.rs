@@ -29,6 +29,14 @@ pub enum RenderError {
         /// the encoder's message
         message: String,
     },
+    /// A material library or texture image could not be read.
+    #[error("{path}: {message}")]
+    Texture {
+        /// the file
+        path: PathBuf,
+        /// what is wrong
+        message: String,
+    },
     /// Writing a file failed.
     #[error(transparent)]
     Mesh(#[from] normalnet_mesh::MeshError),

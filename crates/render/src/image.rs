@@ -176,13 +176,15 @@ impl Image {
         Ok(out)
     }
 
-    /// Decodes an 8-bit RGB or RGBA PNG (alpha dropped); used by tests and tools.
+    /// Decodes a PNG of any colour type and depth to 8-bit RGB (palette and
+    /// grey expanded, 16-bit reduced, alpha dropped): textures, tests and tools.
     pub fn decode_png(bytes: &[u8]) -> Result<Image, RenderError> {
         let err = |message: String| RenderError::Png {
             path: "<memory>".into(),
             message,
         };
-        let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        decoder.set_transformations(png::Transformations::normalize_to_color8());
         let mut reader = decoder.read_info().map_err(|e| err(e.to_string()))?;
         let size = reader
             .output_buffer_size()
@@ -195,6 +197,8 @@ impl Image {
             return Err(err(format!("unsupported bit depth {:?}", info.bit_depth)));
         }
         let channels = match info.color_type {
+            png::ColorType::Grayscale => 1,
+            png::ColorType::GrayscaleAlpha => 2,
             png::ColorType::Rgb => 3,
             png::ColorType::Rgba => 4,
             other => return Err(err(format!("unsupported colour type {other:?}"))),
@@ -202,7 +206,11 @@ impl Image {
         let mut pixels = Vec::with_capacity(3 * info.width as usize * info.height as usize);
         for row in buf[..info.buffer_size()].chunks(info.line_size) {
             for px in row.chunks(channels).take(info.width as usize) {
-                pixels.extend_from_slice(&px[..3]);
+                if channels < 3 {
+                    pixels.extend_from_slice(&[px[0]; 3]);
+                } else {
+                    pixels.extend_from_slice(&px[..3]);
+                }
             }
         }
         Ok(Image {

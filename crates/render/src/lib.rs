@@ -17,6 +17,7 @@ pub mod grid;
 pub mod image;
 pub mod raster;
 pub mod report;
+pub mod texture;
 
 pub use annotate::{append_colour_bar, draw_lines, render_against_gt, render_annotated};
 pub use colormap::{
@@ -26,3 +27,4 @@ pub use error::RenderError;
 pub use grid::compose_grid;
 pub use image::Image;
 pub use raster::{Projection, RenderOptions, Shading, render};
+pub use texture::{FaceLook, Texture, obj_texture};

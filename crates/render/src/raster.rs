@@ -18,6 +18,7 @@
 
 use crate::error::RenderError;
 use crate::image::Image;
+use crate::texture::{FaceLook, Texture};
 use normalnet_mesh::Mesh;
 use normalnet_mesh::vec3::{self, Vec3};
 use rayon::prelude::*;
@@ -64,6 +65,10 @@ pub struct RenderOptions {
     pub face_colors: Option<Vec<[u8; 3]>>,
     /// base colour of every face when `face_colors` is `None`
     pub base_color: [u8; 3],
+    /// per face, a texture image with corner coordinates or a material
+    /// colour (e.g. [`crate::texture::obj_texture`]), lit like the base
+    /// colour; ignored where `face_colors` is given
+    pub texture: Option<Texture>,
     /// background colour
     pub background: [u8; 3],
     /// ambient light fraction in [0, 1]; the headlight gives the rest
@@ -88,6 +93,7 @@ impl Default for RenderOptions {
             shading: Shading::Flat,
             face_colors: None,
             base_color: [196, 200, 210],
+            texture: None,
             background: [255, 255, 255],
             ambient: 0.25,
             margin: 0.05,
@@ -302,6 +308,18 @@ pub fn render(mesh: &Mesh, options: &RenderOptions) -> Result<Image, RenderError
             got: colors.len(),
         });
     }
+    if let Some(texture) = &options.texture
+        && texture.faces.len() != mesh.num_faces()
+    {
+        return Err(RenderError::InvalidOption {
+            name: "texture",
+            message: format!(
+                "{} faces described, the mesh has {}",
+                texture.faces.len(),
+                mesh.num_faces()
+            ),
+        });
+    }
     let ss = options.supersample;
     let (w, h) = (options.width * ss, options.height * ss);
     let bounds = options.bounds.unwrap_or_else(|| mesh.bounding_box());
@@ -333,10 +351,16 @@ pub fn render(mesh: &Mesh, options: &RenderOptions) -> Result<Image, RenderError
     };
 
     let ambient = options.ambient;
+    let texture = options
+        .texture
+        .as_ref()
+        .filter(|_| options.face_colors.is_none());
+    let look = |f: usize| texture.map_or(FaceLook::Plain, |t| t.faces[f]);
     let base = |f: usize| -> [u8; 3] {
-        match &options.face_colors {
-            Some(c) => c[f],
-            None => options.base_color,
+        match (&options.face_colors, look(f)) {
+            (Some(c), _) => c[f],
+            (None, FaceLook::Colour(c)) => c,
+            (None, _) => options.base_color,
         }
     };
     // per-face draw data; None = skipped (degenerate, edge-on, behind the eye)
@@ -367,13 +391,14 @@ pub fn render(mesh: &Mesh, options: &RenderOptions) -> Result<Image, RenderError
             let light = camera.light_direction(centre);
             let intensity = ambient + (1.0 - ambient) * vec3::dot(n, light).abs();
             let b = base(f);
-            let flat = b.map(|c| (c as f64 * intensity).round().clamp(0.0, 255.0) as u8);
             Some(FaceDraw {
                 screen: s,
                 vertices: idx,
                 area2,
-                flat,
+                flat: lit(b, intensity),
+                intensity,
                 base: b,
+                look: look(f),
                 light,
             })
         })
@@ -440,7 +465,7 @@ pub fn render(mesh: &Mesh, options: &RenderOptions) -> Result<Image, RenderError
                     None
                 };
                 rasterize_face(
-                    d, normals, ambient, y0, rows, w as usize, pixels, &mut depth,
+                    d, normals, texture, ambient, y0, rows, w as usize, pixels, &mut depth,
                 );
             }
         });
@@ -456,8 +481,12 @@ struct FaceDraw {
     area2: f64,
     /// flat-shaded colour
     flat: [u8; 3],
+    /// flat shading's light intensity
+    intensity: f64,
     /// unlit colour
     base: [u8; 3],
+    /// texture or material colour
+    look: FaceLook,
     /// view-space direction towards the light
     light: Vec3,
 }
@@ -467,6 +496,7 @@ struct FaceDraw {
 fn rasterize_face(
     d: &FaceDraw,
     normals: Option<[Vec3; 3]>,
+    texture: Option<&Texture>,
     ambient: f64,
     y0: usize,
     rows: usize,
@@ -517,9 +547,25 @@ fn rasterize_face(
                 let i = row + x as usize;
                 if z > depth[i] {
                     depth[i] = z;
-                    let colour = match n {
-                        None => d.flat,
-                        Some(n) => smooth_colour(d, n, [la, lb, lc], ambient),
+                    let l = [la, lb, lc];
+                    let base = match (texture, d.look) {
+                        (Some(t), FaceLook::Textured { image, uv }) => {
+                            let mut at = [0.0; 2];
+                            for k in 0..3 {
+                                for j in 0..2 {
+                                    at[j] += uv[order[k]][j] * l[k];
+                                }
+                            }
+                            Some(t.sample(image, at))
+                        }
+                        _ => None,
+                    };
+                    let colour = match (n, base) {
+                        (None, None) => d.flat,
+                        (None, Some(base)) => lit(base, d.intensity),
+                        (Some(n), base) => {
+                            smooth_colour(base.unwrap_or(d.base), d.light, n, l, ambient)
+                        }
                     };
                     pixels[3 * i..3 * i + 3].copy_from_slice(&colour);
                 }
@@ -531,18 +577,23 @@ fn rasterize_face(
     }
 }
 
+/// `base` scaled by a light intensity.
+fn lit(base: [u8; 3], intensity: f64) -> [u8; 3] {
+    base.map(|c| (c as f64 * intensity).round().clamp(0.0, 255.0) as u8)
+}
+
 /// Phong-lit colour from interpolated vertex normals (two-sided).
-fn smooth_colour(d: &FaceDraw, n: [Vec3; 3], l: [f64; 3], ambient: f64) -> [u8; 3] {
+fn smooth_colour(base: [u8; 3], light: Vec3, n: [Vec3; 3], l: [f64; 3], ambient: f64) -> [u8; 3] {
     let mut normal = [0.0; 3];
     for k in 0..3 {
         normal = vec3::add(normal, vec3::scale(n[k], l[k]));
     }
     let normal = vec3::normalize_or_zero(normal);
-    let cos = vec3::dot(normal, d.light).abs();
+    let cos = vec3::dot(normal, light).abs();
     let diffuse = ambient + (1.0 - ambient) * cos;
     // headlight: the half vector is the light direction itself
     let specular = 0.25 * cos.powi(32);
-    d.base.map(|c| {
+    base.map(|c| {
         (c as f64 * diffuse + 255.0 * specular)
             .round()
             .clamp(0.0, 255.0) as u8

@@ -1,11 +1,16 @@
 //! `normalnet render`: a mesh to PNG with the software rasterizer of
 //! `normalnet-render`; with `--gt`, faces are coloured by their angular error
 //! against the ground truth (turbo colormap, colour bar with ticks, E_a in
-//! the title).
+//! the title). An OBJ whose materials have texture maps (`mtllib`, `usemtl`,
+//! `map_Kd` PNG) or colours (`Kd`) is drawn with them unless `--gt` or
+//! `--no-texture` is given (issue 38).
 
 use anyhow::Context;
-use normalnet_render::{Projection, RenderOptions, Shading, render_against_gt};
-use std::path::PathBuf;
+use normalnet_mesh::{Format, Mesh};
+use normalnet_render::{
+    Projection, RenderOptions, Shading, Texture, obj_texture, render_against_gt,
+};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Arguments of `normalnet render`.
@@ -41,6 +46,11 @@ pub struct Args {
     /// Title drawn at the top-left (default: the file name, plus E_a with --gt).
     #[arg(long)]
     pub title: Option<String>,
+    /// Draw an OBJ's faces in the base colour, not with its materials'
+    /// textures and colours (these are drawn by default; `--gt` colours by
+    /// error instead).
+    #[arg(long)]
+    pub no_texture: bool,
 }
 
 /// Parses `AZ,EL` (degrees).
@@ -80,7 +90,11 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let start = Instant::now();
     crate::output::check_file(&args.out, crate::output::PNG, "picture")?;
-    let mesh = crate::input::read_mesh(&args.mesh)?;
+    let (mesh, texture) = if args.gt.is_none() && !args.no_texture {
+        read_with_texture(&args.mesh)?
+    } else {
+        (crate::input::read_mesh(&args.mesh)?, None)
+    };
     let mut options = RenderOptions {
         width: args.size.0,
         height: args.size.1,
@@ -92,6 +106,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             Shading::Flat
         },
         supersample: args.supersample,
+        texture,
         ..Default::default()
     };
     if let Some(fov_deg) = args.perspective {
@@ -126,6 +141,24 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The mesh of `path` and, for an OBJ with materials, what its faces show;
+/// a material library or texture that cannot be read is a warning (the
+/// mesh is drawn in the base colour), not an error.
+fn read_with_texture(path: &Path) -> anyhow::Result<(Mesh, Option<Texture>)> {
+    if Format::from_path(path) != Some(Format::Obj) {
+        return Ok((crate::input::read_mesh(path)?, None));
+    }
+    let file = crate::input::read_mesh_file(path)?;
+    let texture = match obj_texture(&file.attributes) {
+        Ok(texture) => texture.filter(Texture::is_visible),
+        Err(e) => {
+            stderr_line!("warning: {e}; drawing {} without it", path.display());
+            None
+        }
+    };
+    Ok((file.mesh, texture))
 }
 
 #[cfg(test)]
