@@ -170,16 +170,122 @@ def metrics(gt: Mesh, result: Union[Mesh, Any]) -> Dict[str, Any]:
     return json.loads(_normalnet.metrics(gv, gf, rv, rf))
 
 
-def read_mesh(path: Union[str, os.PathLike]) -> Mesh:
-    """``(vertices, faces)`` of an OBJ / OFF / PLY / STL file."""
-    return _normalnet.read_mesh(os.fspath(path))
+def read_mesh(
+    path: Union[str, os.PathLike], attributes: bool = False
+) -> Union[Mesh, Tuple[np.ndarray, np.ndarray, Dict[str, Any]]]:
+    """``(vertices, faces)`` of an OBJ / OFF / PLY / STL / glTF file; faces
+    are the fan triangulation of the file's polygons.
+
+    With ``attributes=True``: ``(vertices, faces, attrs)``, ``attrs`` a dict
+    of what else the file carries (a key is absent when the file has no such
+    data):
+
+    - ``"format"``: ``"obj"``, ``"off"``, ``"ply"``, ``"stl"`` or ``"gltf"``
+      (``.glb`` too); ``"encoding"`` (PLY: ``"ascii"``,
+      ``"binary_little_endian"``, ``"binary_big_endian"``; STL: ``"ascii"``,
+      ``"binary"``; glTF: ``"json"``, ``"binary"``);
+    - ``"polygon_sizes"``: int64 ``(P,)``, corners of each file polygon;
+      polygon ``p`` gave ``polygon_sizes[p] - 2`` consecutive triangles
+      ``(c0, c_i, c_i+1)`` of ``faces``;
+    - ``"warnings"``: list of str, what the reader could not keep;
+    - ``"uv"``: float64 ``(K, 2)``, ``(K, 3)`` when a ``vt`` has w (a
+      component a ``vt`` leaves out is 0), and ``"corner_uv"``: int64
+      ``(M, 3)``, per triangle of ``faces`` the row of ``uv`` of each
+      corner, -1 for a corner without one (OBJ ``vt`` / ``f v/t``);
+    - ``"vertex_colors"``: float64 ``(N, 3)`` or ``(N, 4)``, the values as
+      the file writes them (0-255 for a PLY ``uchar``, often 0-1 in OBJ):
+      OBJ ``v x y z r g b`` (every vertex must have one), PLY vertex
+      ``red green blue [alpha]``, OFF colours (``COFF``, or an ``OFF``
+      whose every vertex has 3 or 4 numbers after x y z);
+    - ``"vertex_properties"`` / ``"face_properties"`` (PLY): dict name →
+      float64 array of every scalar property of the ``vertex`` (N,) /
+      ``face`` (P,: per file polygon) element other than x y z and nx ny
+      nz (colours included). List properties and other elements are not in
+      the dict (they are written back as read);
+    - ``"_file"``: an opaque handle to what was read, for :func:`write_mesh`.
+
+    Not in the dict yet: glTF texture coordinates and colours, OBJ normals,
+    OFF face colours, STL facet attribute bytes; :func:`write_mesh` writes
+    them back as read (normals recomputed from the new positions).
+    """
+    path = os.fspath(path)
+    if not attributes:
+        return _normalnet.read_mesh(path)
+    return _normalnet.read_mesh_attributes(path)
 
 
-def write_mesh(path: Union[str, os.PathLike], vertices: Any, faces: Any) -> None:
+#: the keys of the dict of ``read_mesh(..., attributes=True)`` whose
+#: arrays are converted before writing: float64 (editable) and int64
+#: (read-only)
+_FLOAT_KEYS = ("uv", "vertex_colors")
+_INT_KEYS = ("polygon_sizes", "corner_uv")
+_PROPERTY_KEYS = ("vertex_properties", "face_properties")
+
+
+def _array(value: Any, dtype: Any, key: str) -> np.ndarray:
+    try:
+        return np.ascontiguousarray(value, dtype=dtype)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{key}: not convertible to a {np.dtype(dtype).name} array ({e})") from None
+
+
+def _attribute_edits(attributes: Any) -> Tuple[Any, Dict[str, Any]]:
+    """The handle and the entries of an attribute dict, arrays converted."""
+    handle = attributes.get("_file") if isinstance(attributes, dict) else None
+    if not isinstance(handle, _normalnet.FileAttributes):
+        raise ValueError(
+            "attributes: expected the dict of read_mesh(path, attributes=True) "
+            "(its '_file' entry is missing or was replaced)"
+        )
+    edits: Dict[str, Any] = {}
+    for key, value in attributes.items():
+        if key in _FLOAT_KEYS:
+            value = _array(value, np.float64, key)
+        elif key in _INT_KEYS:
+            value = _array(value, np.int64, key)
+        elif key in _PROPERTY_KEYS:
+            if not isinstance(value, dict):
+                raise ValueError(f"{key}: expected a dict name -> array, got {type(value).__name__}")
+            value = {name: _array(a, np.float64, f"{key}[{name!r}]") for name, a in value.items()}
+        edits[key] = value
+    return handle, edits
+
+
+def write_mesh(
+    path: Union[str, os.PathLike],
+    vertices: Any,
+    faces: Any,
+    attributes: Optional[Dict[str, Any]] = None,
+) -> None:
     """Writes a mesh; the format comes from the suffix; the file appears
-    whole or not at all (temporary file + rename)."""
+    whole or not at all (temporary file + rename).
+
+    ``attributes``: the dict of ``read_mesh(src, attributes=True)``, with
+    ``faces`` as read and new ``vertices`` (e.g. denoised). The file is
+    written with everything ``src`` carries (polygons, texture coordinates,
+    materials, groups, colours, PLY properties, ...; normals recomputed),
+    like :func:`denoise_file` does, and with the edits of the dict's values:
+    ``uv``, ``vertex_colors``, and the arrays of ``vertex_properties`` /
+    ``face_properties`` (PLY integer properties take the value rounded; a
+    value outside the property's type is a ``ValueError``). Only the values
+    that differ from the file's are rewritten (an OBJ / OFF vertex whose
+    colour is unchanged keeps its text as read); ``vertex_colors`` is
+    applied after ``vertex_properties`` (PLY colours are in both). A changed
+    shape, a changed ``format`` / ``encoding`` / ``polygon_sizes`` /
+    ``corner_uv``, an added key or property, other faces, or a dict not from
+    :func:`read_mesh` is a ``ValueError`` naming the key; a key removed from
+    the dict is written as read. What the output lacks is a
+    :class:`UserWarning` (as in :func:`denoise_file`): the reader's
+    ``warnings`` (e.g. OFF comments, a missing ``mtllib`` file), and a
+    format other than ``src``'s (positions and triangles only).
+    """
     v, f = _mesh(vertices, faces)
-    _normalnet.write_mesh(os.fspath(path), v, f)
+    if attributes is None:
+        _normalnet.write_mesh(os.fspath(path), v, f)
+        return
+    handle, edits = _attribute_edits(attributes)
+    for message in _normalnet.write_mesh_attributes(os.fspath(path), v, f, handle, edits):
+        warnings.warn(message, UserWarning, stacklevel=2)
 
 
 def render(

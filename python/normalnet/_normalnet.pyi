@@ -1,7 +1,7 @@
 """Type stubs of the native module (src/lib.rs); use the wrappers in
 ``normalnet`` instead, which check and convert arrays."""
 
-from typing import Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -33,6 +33,30 @@ def metrics(
 ) -> str: ...
 def read_mesh(path: str) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
 def write_mesh(path: str, vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64]) -> None: ...
+def write_mesh_like(
+    path: str, vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64], input: str
+) -> List[str]: ...
+
+class FileAttributes:
+    """What a mesh file carries beyond positions and triangles (the Rust
+    ``Attributes``): the ``_file`` entry of ``read_mesh_attributes``' dict.
+    Opaque and immutable; copies share it."""
+
+    @property
+    def format(self) -> str: ...
+    def __copy__(self) -> "FileAttributes": ...
+    def __deepcopy__(self, memo: Any) -> "FileAttributes": ...
+
+def read_mesh_attributes(
+    path: str,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], Dict[str, Any]]: ...
+def write_mesh_attributes(
+    path: str,
+    vertices: npt.NDArray[np.float64],
+    faces: npt.NDArray[np.int64],
+    file: FileAttributes,
+    edits: Dict[str, Any],
+) -> List[str]: ...
 def render(
     vertices: npt.NDArray[np.float64],
     faces: npt.NDArray[np.int64],

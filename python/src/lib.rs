@@ -7,12 +7,15 @@
 //! message (`ValueError` for bad input and parameters, `OSError` for files,
 //! `RuntimeError` otherwise).
 
+mod attributes;
+
 use normalnet_denoise::{DenoiseError, Denoiser, Kind, METHODS, Params};
 use normalnet_mesh::{Mesh, MeshError, NoProgress, NoiseDirection, NoiseParams};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2};
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
@@ -65,14 +68,19 @@ fn mesh_from(vertices: &PyReadonlyArray2<f64>, faces: &PyReadonlyArray2<i64>) ->
     Mesh::new(positions, tris).map_err(mesh_error)
 }
 
-fn vertices_array<'py>(py: Python<'py>, mesh: &Mesh) -> Bound<'py, PyArray2<f64>> {
+/// Vertices as returned to Python: float64 `N×3`.
+type Vertices<'py> = Bound<'py, PyArray2<f64>>;
+/// Faces as returned to Python: int64 `M×3`.
+type Faces<'py> = Bound<'py, PyArray2<i64>>;
+
+fn vertices_array<'py>(py: Python<'py>, mesh: &Mesh) -> Vertices<'py> {
     let flat: Vec<f64> = mesh.positions.iter().flatten().copied().collect();
     Array2::from_shape_vec((mesh.num_vertices(), 3), flat)
         .expect("N×3")
         .into_pyarray(py)
 }
 
-fn faces_array<'py>(py: Python<'py>, mesh: &Mesh) -> Bound<'py, PyArray2<i64>> {
+fn faces_array<'py>(py: Python<'py>, mesh: &Mesh) -> Faces<'py> {
     let flat: Vec<i64> = mesh.faces.iter().flatten().map(|&i| i as i64).collect();
     Array2::from_shape_vec((mesh.num_faces(), 3), flat)
         .expect("M×3")
@@ -82,7 +90,9 @@ fn faces_array<'py>(py: Python<'py>, mesh: &Mesh) -> Bound<'py, PyArray2<i64>> {
 fn parse_params(json: &str) -> PyResult<Params> {
     match serde_json::from_str::<serde_json::Value>(json).map_err(value_error)? {
         serde_json::Value::Object(m) => Ok(m),
-        other => Err(value_error(format!("parameters must be a mapping, got {other}"))),
+        other => Err(value_error(format!(
+            "parameters must be a mapping, got {other}"
+        ))),
     }
 }
 
@@ -110,7 +120,9 @@ fn denoise<'py>(
         .detach(|| -> Result<_, DenoiseError> {
             let d = Denoiser::new(method, &params)?;
             let o = d.run(&mesh, gt.as_ref(), &NoProgress)?;
-            let stages = o.stages.map(|s| serde_json::to_string(&s).unwrap_or_default());
+            let stages = o
+                .stages
+                .map(|s| serde_json::to_string(&s).unwrap_or_default());
             Ok((o.mesh, d.parameters().to_string(), stages))
         })
         .map_err(denoise_error)?;
@@ -196,11 +208,79 @@ fn metrics<'py>(
 fn read_mesh<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+) -> PyResult<(Vertices<'py>, Faces<'py>)> {
     let mesh = py
         .detach(|| normalnet_mesh::read_mesh(&path))
         .map_err(mesh_error)?;
     Ok((vertices_array(py, &mesh), faces_array(py, &mesh)))
+}
+
+/// Reads a mesh file with what else it carries; returns (vertices, faces,
+/// the attribute dict of [`attributes`], its `_file` entry included).
+#[pyfunction]
+fn read_mesh_attributes<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+) -> PyResult<(Vertices<'py>, Faces<'py>, Bound<'py, PyDict>)> {
+    let file = py
+        .detach(|| normalnet_mesh::read_mesh_file(&path))
+        .map_err(mesh_error)?;
+    let (vertices, faces) = (vertices_array(py, &file.mesh), faces_array(py, &file.mesh));
+    let handle = attributes::FileAttributes {
+        attributes: file.attributes,
+        faces: file.mesh.faces,
+        warnings: file.warnings,
+    };
+    let dict = attributes::attributes_dict(py, handle)?;
+    Ok((vertices, faces, dict))
+}
+
+/// Writes `vertices` (new positions; `faces` those read) with the
+/// attributes `file` holds and the edits of `edits` (the dict `file` came
+/// in, arrays already float64 / int64), atomically; returns the warnings
+/// (the reader's, then the writer's: what the output lacks, like
+/// [`write_mesh_like`]). A changed shape or read-only entry is a ValueError
+/// naming it.
+#[pyfunction]
+fn write_mesh_attributes<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    file: &Bound<'py, attributes::FileAttributes>,
+    edits: &Bound<'py, PyDict>,
+) -> PyResult<Vec<String>> {
+    let mesh = mesh_from(&vertices, &faces)?;
+    let file = file.get();
+    if mesh.num_vertices() != file.attributes.num_vertices || mesh.faces.len() != file.faces.len() {
+        return Err(value_error(format!(
+            "the mesh has {} vertices and {} faces, its attributes were read from a file \
+             with {} vertices and {} triangles",
+            mesh.num_vertices(),
+            mesh.num_faces(),
+            file.attributes.num_vertices,
+            file.faces.len()
+        )));
+    }
+    if let Some(i) = (0..file.faces.len()).find(|&i| mesh.faces[i] != file.faces[i]) {
+        return Err(value_error(format!(
+            "faces[{i}] = {:?} differs from the file's triangle {:?}: the attributes \
+             describe the file's connectivity (only positions can change)",
+            mesh.faces[i], file.faces[i]
+        )));
+    }
+    let attributes = attributes::apply_edits(file, edits)?;
+    let written = py
+        .detach(|| {
+            normalnet_mesh::write_mesh_file(
+                &path,
+                &mesh,
+                &attributes,
+                &normalnet_mesh::FileWriteOptions::default(),
+            )
+        })
+        .map_err(mesh_error)?;
+    Ok(file.warnings.iter().cloned().chain(written).collect())
 }
 
 /// Writes a mesh (format from the extension), atomically.
@@ -285,11 +365,13 @@ fn render<'py>(
         ..Default::default()
     };
     let image = py
-        .detach(|| normalnet_render::render_against_gt(&mesh, gt.as_ref(), &options, title, max_error))
+        .detach(|| {
+            normalnet_render::render_against_gt(&mesh, gt.as_ref(), &options, title, max_error)
+        })
         .map_err(value_error)?;
     let (w, h) = (image.width() as usize, image.height() as usize);
-    let pixels = numpy::ndarray::Array3::from_shape_vec((h, w, 3), image.pixels().to_vec())
-        .expect("H×W×3");
+    let pixels =
+        numpy::ndarray::Array3::from_shape_vec((h, w, 3), image.pixels().to_vec()).expect("H×W×3");
     Ok(pixels.into_pyarray(py))
 }
 
@@ -303,6 +385,9 @@ fn _normalnet(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh_like, m)?)?;
+    m.add_function(wrap_pyfunction!(read_mesh_attributes, m)?)?;
+    m.add_function(wrap_pyfunction!(write_mesh_attributes, m)?)?;
+    m.add_class::<attributes::FileAttributes>()?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
