@@ -323,3 +323,45 @@ fn noise_refuses_a_mesh_collapsed_to_a_point() {
     assert_refused(&o, &["point.obj", "mean edge length"]);
     assert!(!out.exists());
 }
+
+/// Issue 39: `denoise --json` reports the final fold repair (folded faces of
+/// the input, of the method's result and after the repair; vertices moved),
+/// `null` when it is off; the text output names the counts when the method
+/// folded any face.
+#[test]
+fn denoise_reports_the_fold_repair() {
+    let tmp = tempfile::tempdir().unwrap();
+    let input =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/noisy-part.obj");
+    let out = tmp.path().join("out.obj");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["-q", "denoise", s(&input), s(&out), "-m", "bi"];
+        args.extend_from_slice(extra);
+        let o = normalnet(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let v: serde_json::Value = serde_json::from_str(&run(&["--json"])).unwrap();
+    let folds = &v["folds"];
+    let count = |k: &str| folds[k].as_u64().unwrap_or_else(|| panic!("{k}: {folds}"));
+    assert!(
+        count("before") > 0,
+        "bi folds faces of the shipped part: {folds}"
+    );
+    assert!(
+        count("after") <= count("input").min(count("before")),
+        "{folds}"
+    );
+    assert!(count("moved") > 0, "{folds}");
+    let text = run(&[]);
+    assert!(
+        text.contains(&format!(
+            "method {}, after the repair {}",
+            count("before"),
+            count("after")
+        )),
+        "{text}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&run(&["--json", "--no-fold-guard"])).unwrap();
+    assert!(v["folds"].is_null(), "{}", v["folds"]);
+}

@@ -140,6 +140,8 @@ enum Look {
 
 /// One [`FaceLook`] per triangle: the material in effect (`usemtl`) at each
 /// polygon, and for a textured one its fan triangles' corner coordinates.
+/// Attributes whose statements and polygon sizes disagree (edited by hand)
+/// give fewer looks than triangles, which [`crate::render`] refuses.
 fn face_looks(
     obj: &ObjAttributes,
     polygon_sizes: &[u32],
@@ -161,13 +163,16 @@ fn face_looks(
             }
             ObjStatement::Polygons(count) => {
                 for _ in 0..*count {
-                    let size = polygon_sizes[polygon] as usize;
+                    let Some(&size) = polygon_sizes.get(polygon) else {
+                        return faces;
+                    };
+                    let size = size as usize;
                     let uv = |c: usize| -> Option<[f64; 2]> {
                         let t = *obj.corner_texture_coords.get(first_corner + c)?;
                         let coords = obj.texture_coords.get(t as usize)?;
                         Some([coords[0], coords.get(1).copied().unwrap_or(0.0)])
                     };
-                    for i in 1..size - 1 {
+                    for i in 1..size.saturating_sub(1) {
                         faces.push(match look {
                             Look::Plain => FaceLook::Plain,
                             Look::Colour(c) => FaceLook::Colour(c),

@@ -378,7 +378,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let outcome = denoiser
         .run(&mesh, gt.as_ref(), &progress)
         .with_context(|| format!("denoising {} with {}", args.input.display(), info.name))?;
-    let (result, stages) = (outcome.mesh, outcome.stages);
+    let (result, stages, folds) = (outcome.mesh, outcome.stages, outcome.folds);
     let parameters = denoiser.parameters();
     let denoise_seconds = t_denoise.elapsed().as_secs_f64();
     write_result(
@@ -412,6 +412,7 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             "threads": rayon::current_num_threads(),
             "isa": normalnet_denoise::isa::active().name(),
             "stages": stages,
+            "folds": folds,
             "gt": args.gt,
             "metrics": metrics,
             "removed_outliers": removed.as_ref().map(|r| json!({
@@ -430,6 +431,13 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             mesh.num_faces()
         )?;
         writeln!(out, "parameters: {parameters}")?;
+        if let Some(f) = folds.filter(|f| f.before > 0) {
+            writeln!(
+                out,
+                "folded faces: input {}, method {}, after the repair {} ({} vertices moved)",
+                f.input, f.before, f.after, f.moved
+            )?;
+        }
         if let Some(m) = metrics {
             writeln!(
                 out,

@@ -152,7 +152,9 @@ fn read_with_texture(path: &Path) -> anyhow::Result<(Mesh, Option<Texture>)> {
     }
     let file = crate::input::read_mesh_file(path)?;
     let texture = match obj_texture(&file.attributes) {
-        Ok(texture) => texture.filter(Texture::is_visible),
+        Ok(texture) => texture
+            .filter(Texture::is_visible)
+            .filter(|t| t.faces.len() == file.mesh.num_faces()),
         Err(e) => {
             stderr_line!("warning: {e}; drawing {} without it", path.display());
             None
