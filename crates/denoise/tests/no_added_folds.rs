@@ -1,6 +1,7 @@
 //! Issue 39: no method adds folds. On cow and spot (`../shared/data/c3d`,
 //! Gaussian noise level 0.3, seed 1: `normalnet noise MESH --level 0.3
-//! --seed 1`) and Fandisk0.3 (`../shared/data/gd`), every registered method
+//! --seed 1`), Fandisk0.3 (`../shared/data/gd`) and the shipped example
+//! (`examples/noisy-part.obj`, `clean-part.obj`), every registered method
 //! with its defaults (the oracle with the ground truth) leaves no more faces
 //! flipped against the ground truth, and no more folded faces
 //! (`normalnet_filters::fold_repair`), than the noisy input had. Skipped
@@ -53,6 +54,12 @@ fn meshes() -> Vec<(&'static str, Mesh, Mesh)> {
     } else {
         eprintln!("skipping Fandisk0.3: {} is absent", fandisk.display());
     }
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    out.push((
+        "part",
+        read_mesh(examples.join("noisy-part.obj")).unwrap(),
+        read_mesh(examples.join("clean-part.obj")).unwrap(),
+    ));
     out
 }
 

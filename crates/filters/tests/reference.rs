@@ -111,6 +111,7 @@ fn classical_methods_reach_the_reference_on_fandisk03() {
                 "sun07",
                 Sun07Params {
                     fold_guard: false,
+                    vertex_iterations: 50, // the reference code's default
                     ..Default::default()
                 },
                 &noisy,
