@@ -1,11 +1,13 @@
-//! Burn-free f32 CPU inference of the NormalNet CNN (SPEC §6).
+//! Burn-free CPU inference and training of the NormalNet CNN (SPEC §6).
 //!
-//! Training stays in `normalnet-net` (burn); this crate runs a trained network
-//! fast on the CPU, with no deep-learning stack: batch norm is folded into the
+//! Inference ([`Cnn`]) and training ([`Trainer`]: forward,
+//! backward and Adam, what `normalnet train` runs; burn stays only behind
+//! `normalnet-net`'s feature as a cross-check) run with no deep-learning
+//! stack: batch norm is folded into the
 //! preceding convolution or linear layer, the first 5³ convolution reads
 //! only the occupied voxels (a face neighbourhood is a surface sheet: a few %
-//! of the grid; on AVX-512 as 1D convolutions of the grid rows that cross
-//! it, elsewhere as a scatter of the occupied cubes), later layers compute only the cubes whose receptive field
+//! of the grid; on AVX-512 and AVX2 as 1D convolutions of the grid rows that
+//! cross it, in the scalar path as a scatter of the occupied cubes), later layers compute only the cubes whose receptive field
 //! reaches an occupied voxel (every other cube equals the activation of an
 //! empty grid, computed once), and the 3³ convolutions run channels-last with the
 //! output channels held in registers, compiled for AVX-512 / AVX2+FMA and

@@ -203,7 +203,7 @@ pub const FREEZE_DEG: f64 = 0.5;
 /// 35° 6.705° (organic meshes over-smoothed: homer 9.0°). At 25 iterations
 /// (N_v 10, μ_g 0.3) the 8 meshes went from 6.101° to 5.955° and the
 /// Twelve-like validation polyhedra from 4.835° to 4.862° (the one loser;
-/// see docs/benchmarks.md).
+/// see docs/experiments.md, "Flat patches skip the network").
 pub const FLAT_SKIP_DEG: f64 = 15.0;
 
 /// Default of [`DenoiseParams::reuse_move`]: off. At 0.1 mean edge
