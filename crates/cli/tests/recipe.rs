@@ -222,3 +222,73 @@ fn a_bad_recipe_is_refused_before_any_work() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("cannot be used with"), "{}", stderr(&o));
 }
+
+/// Issue 35: `configs/recipes/cnr.toml` rebuilds the shipped CNR model:
+/// every number of `models/cnr/cnr.json` (stages, clusters, regressors) and
+/// its training notes but for the last (the command and its seconds; the
+/// recipe's notes end with the stage and the recipe instead). A CNR recipe
+/// with another kind of stage is refused before any work.
+#[test]
+fn the_cnr_recipe_rebuilds_the_shipped_cnr_model() {
+    if !repo().join("../shared/data/c3d/cow.obj").is_file() {
+        println!("SKIP: no training data under ../shared/data");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cnr");
+    let recipe = repo().join("configs/recipes/cnr.toml");
+    let o = normalnet(&["-q", "train", "--recipe", s(&recipe), "--out", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (mut built, mut shipped) = (
+        read(&out.join("cnr.json")),
+        read(&repo().join("models/cnr/cnr.json")),
+    );
+    let notes = |v: &mut serde_json::Value| -> Vec<String> {
+        let n: Vec<String> = serde_json::from_value(v["training"].take()).unwrap();
+        n
+    };
+    let (built_notes, shipped_notes) = (notes(&mut built), notes(&mut shipped));
+    assert!(
+        built == shipped,
+        "the model's numbers differ from models/cnr/cnr.json"
+    );
+    let kept = shipped_notes.len() - 1;
+    assert_eq!(built_notes[..kept], shipped_notes[..kept]);
+    assert!(
+        built_notes[kept].starts_with("trained by stage \"cnr\""),
+        "{built_notes:?}"
+    );
+    assert!(
+        built_notes[kept + 1].starts_with("recipe "),
+        "{built_notes:?}"
+    );
+
+    let mixed = tmp.path().join("mixed.toml");
+    std::fs::write(
+        &mixed,
+        format!(
+            "name = \"mixed\"\n[[stage]]\nkind = \"cnr\"\nname = \"c\"\nconfig = \"{}\"\n\
+             [[stage]]\nkind = \"evaluate\"\nname = \"v\"\nsuite = \"{}\"\n",
+            s(&repo().join("configs/train-lite.toml")),
+            s(&repo().join("configs/validation.toml"))
+        ),
+    )
+    .unwrap();
+    let o = normalnet(&[
+        "-q",
+        "train",
+        "--recipe",
+        s(&mixed),
+        "--out",
+        s(&tmp.path().join("m")),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("only cnr stages, not evaluate"),
+        "{}",
+        stderr(&o)
+    );
+}

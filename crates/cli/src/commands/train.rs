@@ -7,6 +7,7 @@
 //! evaluation, resumed where an earlier run in `--out` stopped.
 
 use anyhow::Context;
+use normalnet_denoise::cnr::train::{CnrTrainSettings, train_from_config};
 use normalnet_net::training::{TrainConfig, train};
 use std::io::Write;
 use std::path::PathBuf;
@@ -36,38 +37,28 @@ pub struct Args {
     #[arg(long, default_value = "normalnet", value_parser = ["normalnet", "cnr"])]
     pub method: String,
     /// CNR: hidden width of each regressor.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = CnrTrainSettings::default().hidden)]
     pub hidden: usize,
     /// CNR: clusters per stage.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = CnrTrainSettings::default().clusters)]
     pub clusters: usize,
     /// CNR: passes over each cluster's faces.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = CnrTrainSettings::default().epochs)]
     pub epochs: usize,
     /// CNR: the descriptor's neighbourhood in vertex rings (SPEC: 1).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = CnrTrainSettings::default().ring)]
     pub ring: usize,
     /// CNR: cascade stages.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = CnrTrainSettings::default().stages)]
     pub stages: usize,
     /// CNR: training faces per stage at most (a seeded subsample of all).
-    #[arg(long, default_value_t = 200_000)]
+    #[arg(long, default_value_t = CnrTrainSettings::default().max_samples)]
     pub max_samples: usize,
 }
 
 /// `normalnet train --method cnr`.
 fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<()> {
-    use normalnet_denoise::cnr::train::{CnrTrainSettings, TrainMesh, train as train_cnr_model};
-    use normalnet_net::training::noisy_pairs;
     let bar = crate::progress::Bar::new(quiet);
-    let meshes = |specs, seed| -> anyhow::Result<Vec<TrainMesh>> {
-        Ok(noisy_pairs(config, specs, seed, &bar)?
-            .into_iter()
-            .map(|(name, clean, noisy)| TrainMesh::new(name, &clean, noisy))
-            .collect())
-    };
-    let train_meshes = meshes(&config.sources, config.seed)?;
-    let validation = meshes(&config.validation, config.seed + 777)?;
     let settings = CnrTrainSettings {
         hidden: args.hidden,
         clusters: args.clusters,
@@ -78,21 +69,11 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
         seed: config.seed,
         ..CnrTrainSettings::default()
     };
-    if settings.hidden == 0
-        || settings.clusters == 0
-        || settings.epochs == 0
-        || settings.stages == 0
-        || settings.max_samples == 0
-    {
-        anyhow::bail!(
-            "--hidden, --clusters, --epochs, --stages and --max-samples must be positive"
-        );
-    }
-    if !(1..=3).contains(&settings.ring) {
-        anyhow::bail!("--ring must be 1, 2 or 3");
-    }
+    settings
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--{}", e.replace('_', "-")))?;
     let start = std::time::Instant::now();
-    let mut model = train_cnr_model(train_meshes, validation, &settings, &bar);
+    let mut model = train_from_config(config, &settings, &bar)?;
     model.training.push(format!(
         "trained by `normalnet train --method cnr` with {} in {:.0} s",
         args.config
@@ -102,8 +83,8 @@ fn train_cnr(args: &Args, config: &TrainConfig, quiet: bool) -> anyhow::Result<(
     ));
     std::fs::create_dir_all(&args.out)?;
     let path = args.out.join("cnr.json");
-    let text = serde_json::to_string(&model)?;
-    normalnet_mesh::io::write_atomically(&path, |w| w.write_all(text.as_bytes()))
+    model
+        .write(&path)
         .with_context(|| format!("writing {}", path.display()))?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "CNR model written to {}", path.display())?;
@@ -127,7 +108,12 @@ fn train_recipe(recipe: &std::path::Path, args: &Args, quiet: bool) -> anyhow::R
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "bundle written to {} ({:.0} s)",
+        "{} written to {} ({:.0} s)",
+        if outcome.manifest.is_some() {
+            "bundle"
+        } else {
+            "CNR model (cnr.json)"
+        },
         args.out.display(),
         start.elapsed().as_secs_f64()
     )?;
@@ -138,7 +124,11 @@ fn train_recipe(recipe: &std::path::Path, args: &Args, quiet: bool) -> anyhow::R
             if *ran { "ran" } else { "done before" }
         )?;
     }
-    if let Some(e) = &outcome.manifest.evaluation {
+    if let Some(e) = outcome
+        .manifest
+        .as_ref()
+        .and_then(|m| m.evaluation.as_ref())
+    {
         writeln!(out, "  validation ({}): all {:.3}°", e.suite, e.all_deg)?;
         for (group, deg) in &e.groups {
             writeln!(out, "    {group} {deg:.3}°")?;

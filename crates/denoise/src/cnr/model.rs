@@ -185,6 +185,16 @@ pub struct CnrModel {
 }
 
 impl CnrModel {
+    /// Writes the model file (JSON, as [`CnrModel::parse`] reads it) to
+    /// `path`, whole or not at all.
+    ///
+    /// # Errors
+    /// The file cannot be written (naming it).
+    pub fn write(&self, path: &std::path::Path) -> Result<(), normalnet_mesh::MeshError> {
+        let text = serde_json::to_string(self).expect("a CNR model serializes");
+        normalnet_mesh::io::write_atomically(path, |w| w.write_all(text.as_bytes()))
+    }
+
     /// Parses and checks a model file's text; `label` names it in errors.
     pub fn parse(text: &str, label: &str) -> Result<CnrModel, String> {
         let m: CnrModel =

@@ -22,8 +22,10 @@ use super::model::{CNR_FORMAT, CnrModel, Mlp, REFLECTIONS, Stage, nearest, refle
 use super::stage_normals;
 
 /// Training settings (defaults: SPEC §9.1's choices, measured in the
-/// closing note of issue 13).
-#[derive(Clone, Debug)]
+/// closing note of issue 13; written here once: `normalnet train --method
+/// cnr` and a recipe's `cnr` stage lay their values over them).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct CnrTrainSettings {
     /// hidden width H of every regressor
     pub hidden: usize,
@@ -45,6 +47,66 @@ pub struct CnrTrainSettings {
     pub max_samples: usize,
     /// the descriptor's neighbourhood in vertex rings (SPEC: 1)
     pub ring: usize,
+}
+
+impl CnrTrainSettings {
+    /// Checks every field; the message names it.
+    ///
+    /// # Errors
+    /// A count that is zero, a ring outside 1..=3, a step size that is not
+    /// positive and finite.
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, value) in [
+            ("hidden", self.hidden),
+            ("clusters", self.clusters),
+            ("stages", self.stages),
+            ("epochs", self.epochs),
+            ("batch", self.batch),
+            ("max_samples", self.max_samples),
+        ] {
+            if value == 0 {
+                return Err(format!("{name} must be positive"));
+            }
+        }
+        if !(1..=3).contains(&self.ring) {
+            return Err(format!("ring must be 1, 2 or 3, not {}", self.ring));
+        }
+        if !(self.lr > 0.0 && self.lr.is_finite()) {
+            return Err(format!("lr must be positive, not {}", self.lr));
+        }
+        Ok(())
+    }
+}
+
+/// A CNR model trained on a training config's sources, its validation
+/// meshes checking each stage (noisy copies made as NormalNet's training
+/// makes them: `normalnet_net::training::noisy_pairs`, the config's seed;
+/// validation copies at seed + 777). What `normalnet train --method cnr`
+/// and a recipe's `cnr` stage run. `settings.seed` is used as given.
+///
+/// # Errors
+/// Invalid settings ([`DenoiseError::Parameter`]), unreadable sources.
+pub fn train_from_config(
+    config: &normalnet_net::training::TrainConfig,
+    settings: &CnrTrainSettings,
+    progress: &dyn Progress,
+) -> Result<CnrModel, crate::DenoiseError> {
+    use normalnet_net::training::noisy_pairs;
+    settings
+        .validate()
+        .map_err(|message| crate::DenoiseError::Parameter {
+            method: "cnr",
+            message,
+        })?;
+    let meshes = |specs, seed| -> Result<Vec<TrainMesh>, crate::DenoiseError> {
+        Ok(noisy_pairs(config, specs, seed, progress)?
+            .into_iter()
+            .map(|(name, clean, noisy)| TrainMesh::new(name, &clean, noisy))
+            .collect())
+    };
+    let train_meshes = meshes(&config.sources, config.seed)?;
+    let validation = meshes(&config.validation, config.seed + 777)?;
+    Ok(train(train_meshes, validation, settings, progress))
 }
 
 impl Default for CnrTrainSettings {

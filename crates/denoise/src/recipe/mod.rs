@@ -37,6 +37,21 @@
 //! suite = "../validation.toml"
 //! ```
 //!
+//! A CNR recipe has one stage instead, which trains the model on a
+//! training config's sources (`configs/recipes/cnr.toml`):
+//!
+//! ```toml
+//! [[stage]]
+//! kind = "cnr"
+//! name = "cnr"
+//! config = "../train-lite.toml"  # sources, validation meshes and seed
+//! [stage.settings]               # cnr::train::CnrTrainSettings, over its defaults
+//! clusters = 4
+//! ```
+//!
+//! and writes `DIR/cnr.json`, its training notes ending with the recipe,
+//! its hash and the commit.
+//!
 //! The bundle in `DIR` takes the networks of the last `networks` stage,
 //! the `[switch]` table of the last `switch_fit` stage (and `[switch.late]`
 //! of the last one with `late = true`) and the figures of the last
@@ -90,6 +105,24 @@ pub enum Stage {
     SwitchFit(FitStage),
     /// Run the bundle made so far on a validation suite.
     Evaluate(EvaluateStage),
+    /// Train a CNR model (`crate::cnr::train::train_from_config`): the
+    /// model of a CNR recipe, which has no other kind of stage.
+    Cnr(CnrStage),
+}
+
+/// Stage `cnr`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CnrStage {
+    /// the stage's name
+    pub name: String,
+    /// the training config (relative to the recipe's folder): its sources,
+    /// validation meshes and seed
+    pub config: String,
+    /// the training settings over their defaults; the seed is the
+    /// config's (a `seed` here is refused)
+    #[serde(default)]
+    pub settings: crate::cnr::train::CnrTrainSettings,
 }
 
 /// Stage `networks`.
@@ -241,6 +274,7 @@ impl Stage {
             Stage::SwitchRows(s) => &s.name,
             Stage::SwitchFit(s) => &s.name,
             Stage::Evaluate(s) => &s.name,
+            Stage::Cnr(s) => &s.name,
         }
     }
 
@@ -251,6 +285,7 @@ impl Stage {
             Stage::SwitchRows(_) => "switch_rows",
             Stage::SwitchFit(_) => "switch_fit",
             Stage::Evaluate(_) => "evaluate",
+            Stage::Cnr(_) => "cnr",
         }
     }
 }
@@ -305,8 +340,26 @@ impl Recipe {
     /// # Errors
     /// An unreadable or invalid config, naming the stage.
     pub fn train_config(&self, stage: &NetworksStage) -> Result<TrainConfig, DenoiseError> {
-        let path = self.path(&stage.config);
-        TrainConfig::read(&path).map_err(|e| self.stage_error(&stage.name, e.to_string()))
+        self.read_config(&stage.name, &stage.config)
+    }
+
+    /// The training config `config` (relative) of stage `name`.
+    fn read_config(&self, name: &str, config: &str) -> Result<TrainConfig, DenoiseError> {
+        TrainConfig::read(&self.path(config)).map_err(|e| self.stage_error(name, e.to_string()))
+    }
+
+    /// The training config of a `cnr` stage.
+    ///
+    /// # Errors
+    /// An unreadable or invalid config, naming the stage.
+    pub fn cnr_config(&self, stage: &CnrStage) -> Result<TrainConfig, DenoiseError> {
+        self.read_config(&stage.name, &stage.config)
+    }
+
+    /// Whether the recipe makes a CNR model (a `cnr` stage) rather than a
+    /// NormalNet bundle.
+    pub fn makes_cnr(&self) -> bool {
+        self.stages.iter().any(|s| matches!(s, Stage::Cnr(_)))
     }
 
     /// FNV-1a 64 (hex) of the recipe's text and of every file it names
@@ -320,6 +373,7 @@ impl Recipe {
         for stage in &self.stages {
             match stage {
                 Stage::Networks(s) => files.push(self.path(&s.config)),
+                Stage::Cnr(s) => files.push(self.path(&s.config)),
                 Stage::Evaluate(s) => files.push(self.path(&s.suite)),
                 _ => {}
             }
@@ -382,10 +436,21 @@ impl Recipe {
             self.check_stage(i)?;
         }
         self.check_held_out()?;
-        if !self.stages.iter().any(|s| matches!(s, Stage::Networks(_))) {
+        let networks = self.stages.iter().any(|s| matches!(s, Stage::Networks(_)));
+        if self.makes_cnr() {
+            if let Some(other) = self.stages.iter().find(|s| !matches!(s, Stage::Cnr(_))) {
+                return Err(self.stage_error(
+                    other.name(),
+                    format!(
+                        "a CNR recipe (it has a cnr stage) has only cnr stages, not {}",
+                        other.kind()
+                    ),
+                ));
+            }
+        } else if !networks {
             return Err(recipe_error(
                 &self.file,
-                "no networks stage: a bundle needs one".into(),
+                "no networks stage (a bundle needs one) and no cnr stage".into(),
             ));
         }
         Ok(())
@@ -405,6 +470,7 @@ impl Recipe {
         for stage in &self.stages {
             let sources = match stage {
                 Stage::Networks(s) => self.train_config(s)?.sources,
+                Stage::Cnr(s) => self.cnr_config(s)?.sources,
                 Stage::SwitchRows(s) => s.pairs.clone(),
                 _ => continue,
             };
@@ -497,6 +563,17 @@ impl Recipe {
                 {
                     return Err(bad(
                         "a late table needs an earlier main switch_fit stage".into()
+                    ));
+                }
+            }
+            Stage::Cnr(s) => {
+                self.cnr_config(s)?;
+                s.settings
+                    .validate()
+                    .map_err(|e| bad(format!("settings: {e}")))?;
+                if s.settings.seed != crate::cnr::train::CnrTrainSettings::default().seed {
+                    return Err(bad(
+                        "settings: no seed here, the training config's seed is used".into(),
                     ));
                 }
             }

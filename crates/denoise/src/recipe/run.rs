@@ -27,15 +27,17 @@ struct RunFile {
 /// What a finished recipe run gives.
 #[derive(Debug)]
 pub struct RecipeOutcome {
-    /// the bundle's manifest (as written to `OUT/manifest.toml`)
-    pub manifest: Manifest,
+    /// the bundle's manifest (as written to `OUT/manifest.toml`); `None`
+    /// for a CNR recipe, whose model is `OUT/cnr.json`
+    pub manifest: Option<Manifest>,
     /// per stage: its kind and name, and whether this call ran it (false:
     /// it was done by an earlier call)
     pub stages: Vec<(String, bool)>,
 }
 
 /// Runs the recipe in `file` into `out`: every stage not yet done, then the
-/// bundle (`OUT/net1..6.safetensors`, `OUT/manifest.toml`, written last).
+/// bundle (`OUT/net1..6.safetensors`, `OUT/manifest.toml`, written last),
+/// or for a CNR recipe the model (`OUT/cnr.json`).
 /// Run again on the same folder it continues where it stopped; a folder of
 /// another recipe (or of this one edited since) is refused.
 ///
@@ -65,6 +67,7 @@ pub fn run(
             Stage::Networks(s) => stages::networks(&recipe, s, out, &dir, progress)?,
             Stage::SwitchRows(s) => stages::switch_rows(&recipe, s, out, &dir, progress)?,
             Stage::SwitchFit(s) => stages::switch_fit(&recipe, s, out, &dir, progress)?,
+            Stage::Cnr(s) => stages::cnr(&recipe, s, &dir, progress)?,
             Stage::Evaluate(s) => {
                 let bundle = dir.join("bundle");
                 assemble(&recipe, &hash, out, i, &bundle)?;
@@ -74,7 +77,12 @@ pub fn run(
         write_file(&dir.join(DONE), label.as_bytes())?;
         ran.push((label, true));
     }
-    let manifest = assemble(&recipe, &hash, out, recipe.stages.len(), out)?;
+    let manifest = if recipe.makes_cnr() {
+        assemble_cnr(&recipe, &hash, out)?;
+        None
+    } else {
+        Some(assemble(&recipe, &hash, out, recipe.stages.len(), out)?)
+    };
     Ok(RecipeOutcome {
         manifest,
         stages: ran,
@@ -110,6 +118,27 @@ fn claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<(), DenoiseError> {
         }
         Err(e) => Err(recipe_error(&path, e.to_string())),
     }
+}
+
+/// `OUT/cnr.json`: the last `cnr` stage's model, its training notes ending
+/// with the recipe, its hash and the commit.
+fn assemble_cnr(recipe: &Recipe, hash: &str, out: &Path) -> Result<(), DenoiseError> {
+    let last = (0..recipe.stages.len())
+        .rev()
+        .find(|&i| recipe.stages[i].kind() == "cnr")
+        .expect("a CNR recipe has a cnr stage");
+    let source = recipe.stage_dir(out, last).join(stages::CNR_FILE);
+    let text =
+        std::fs::read_to_string(&source).map_err(|e| recipe_error(&source, e.to_string()))?;
+    let mut model = crate::cnr::model::CnrModel::parse(&text, &source.display().to_string())
+        .map_err(|e| recipe_error(&source, e))?;
+    model.training.push(format!(
+        "recipe {} (hash {hash}, commit {})",
+        recipe.file.display(),
+        normalnet_net::bundle::commit()
+    ));
+    model.write(&out.join(stages::CNR_FILE))?;
+    Ok(())
 }
 
 /// The bundle made by the stages before `upto`, written to `target`: the

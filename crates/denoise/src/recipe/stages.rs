@@ -13,7 +13,7 @@ use normalnet_net::switch_rows::{TracePath, TraceSettings, read_rows, trace, wri
 use normalnet_net::training::{TrainConfig, noisy_pairs, train};
 use serde::{Deserialize, Serialize};
 
-use super::{FitStage, NetworksStage, Recipe, RowsStage, recipe_error};
+use super::{CnrStage, FitStage, NetworksStage, Recipe, RowsStage, recipe_error};
 use crate::DenoiseError;
 
 /// The file a `switch_fit` stage writes its table to.
@@ -47,6 +47,35 @@ pub(super) fn networks(
     let resume = dir.join("state.toml").is_file();
     train(&config, dir, resume, progress)
         .map_err(|e| recipe_error(dir, format!("stage {:?}: {e}", stage.name)))?;
+    Ok(())
+}
+
+/// The file a `cnr` stage writes its model to (and the recipe's output).
+pub(super) const CNR_FILE: &str = "cnr.json";
+
+/// `cnr`: a CNR model trained on the config's sources into `DIR/cnr.json`
+/// (run again from the start if it stopped: it takes seconds to minutes).
+pub(super) fn cnr(
+    recipe: &Recipe,
+    stage: &CnrStage,
+    dir: &Path,
+    progress: &dyn Progress,
+) -> Result<(), DenoiseError> {
+    let config = recipe.cnr_config(stage)?;
+    let settings = crate::cnr::train::CnrTrainSettings {
+        seed: config.seed,
+        ..stage.settings.clone()
+    };
+    let start = std::time::Instant::now();
+    let mut model = crate::cnr::train::train_from_config(&config, &settings, progress)
+        .map_err(|e| recipe_error(dir, format!("stage {:?}: {e}", stage.name)))?;
+    model.training.push(format!(
+        "trained by stage {:?} with {} in {:.0} s",
+        stage.name,
+        stage.config,
+        start.elapsed().as_secs_f64()
+    ));
+    model.write(&dir.join(CNR_FILE))?;
     Ok(())
 }
 
