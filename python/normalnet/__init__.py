@@ -191,7 +191,12 @@ def read_mesh(
     - ``"uv"``: float64 ``(K, 2)``, ``(K, 3)`` when a ``vt`` has w (a
       component a ``vt`` leaves out is 0), and ``"corner_uv"``: int64
       ``(M, 3)``, per triangle of ``faces`` the row of ``uv`` of each
-      corner, -1 for a corner without one (OBJ ``vt`` / ``f v/t``);
+      corner, -1 for a corner without one (OBJ ``vt`` / ``f v/t``; glTF
+      ``TEXCOORD_0``, see below);
+    - ``"colors"``: float64 ``(K, 3)`` or ``(K, 4)``, and
+      ``"corner_colors"``: int64 ``(M, 3)``, the same per-corner layout
+      (glTF ``COLOR_0``; values 0-1, alpha 1 for an RGB element of a file
+      that also has RGBA ones);
     - ``"vertex_colors"``: float64 ``(N, 3)`` or ``(N, 4)``, the values as
       the file writes them (0-255 for a PLY ``uchar``, often 0-1 in OBJ):
       OBJ ``v x y z r g b`` (every vertex must have one), PLY vertex
@@ -204,9 +209,21 @@ def read_mesh(
       the dict (they are written back as read);
     - ``"_file"``: an opaque handle to what was read, for :func:`write_mesh`.
 
-    Not in the dict yet: glTF texture coordinates and colours, OBJ normals,
-    OFF face colours, STL facet attribute bytes; :func:`write_mesh` writes
-    them back as read (normals recomputed from the new positions).
+    glTF / GLB: the primitives are welded into one mesh by equal positions,
+    so a vertex on a seam can have one UV or colour per primitive meeting
+    there; hence per corner. ``uv`` / ``colors`` hold the elements of the
+    ``TEXCOORD_0`` / ``COLOR_0`` accessors (each accessor once, in the order
+    the primitives first use it; float as read, normalized unsigned bytes /
+    shorts divided by 255 / 65535), ``corner_uv`` / ``corner_colors`` index
+    them per triangle of ``faces`` (-1 on the triangles of a primitive
+    without the attribute). They are read-only (written back as read); an
+    attribute whose accessor is broken is left out and named in
+    ``warnings``.
+
+    Not in the dict yet: glTF's other attributes (``TEXCOORD_1``,
+    ``COLOR_1``, ...), OBJ normals, OFF face colours, STL facet attribute
+    bytes; :func:`write_mesh` writes them back as read (normals recomputed
+    from the new positions).
     """
     path = os.fspath(path)
     if not attributes:
@@ -217,8 +234,8 @@ def read_mesh(
 #: the keys of the dict of ``read_mesh(..., attributes=True)`` whose
 #: arrays are converted before writing: float64 (editable) and int64
 #: (read-only)
-_FLOAT_KEYS = ("uv", "vertex_colors")
-_INT_KEYS = ("polygon_sizes", "corner_uv")
+_FLOAT_KEYS = ("uv", "colors", "vertex_colors")
+_INT_KEYS = ("polygon_sizes", "corner_uv", "corner_colors")
 _PROPERTY_KEYS = ("vertex_properties", "face_properties")
 
 
@@ -265,14 +282,15 @@ def write_mesh(
     written with everything ``src`` carries (polygons, texture coordinates,
     materials, groups, colours, PLY properties, ...; normals recomputed),
     like :func:`denoise_file` does, and with the edits of the dict's values:
-    ``uv``, ``vertex_colors``, and the arrays of ``vertex_properties`` /
+    ``uv`` (OBJ), ``vertex_colors``, and the arrays of ``vertex_properties`` /
     ``face_properties`` (PLY integer properties take the value rounded; a
     value outside the property's type is a ``ValueError``). Only the values
     that differ from the file's are rewritten (an OBJ / OFF vertex whose
     colour is unchanged keeps its text as read); ``vertex_colors`` is
     applied after ``vertex_properties`` (PLY colours are in both). A changed
     shape, a changed ``format`` / ``encoding`` / ``polygon_sizes`` /
-    ``corner_uv``, an added key or property, other faces, or a dict not from
+    ``corner_uv`` (and, glTF, ``uv`` / ``colors`` / ``corner_colors``: read-only
+    there), an added key or property, other faces, or a dict not from
     :func:`read_mesh` is a ``ValueError`` naming the key; a key removed from
     the dict is written as read. What the output lacks is a
     :class:`UserWarning` (as in :func:`denoise_file`): the reader's

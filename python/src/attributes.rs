@@ -12,6 +12,13 @@
 //! - `uv` (float64 `K×2`, `K×3` when a `vt` has w; missing components 0)
 //!   and `corner_uv` (int64 `M×3`, one row per returned triangle, index
 //!   into `uv`, −1 for a corner without one): OBJ `vt`;
+//!   For glTF, `uv` is the `TEXCOORD_0` elements of the primitives
+//!   ([`GltfAttributes::corner_values`]: each accessor once, in the order
+//!   the primitives first use it) and `corner_uv` indexes them per corner
+//!   (−1 for the triangles of a primitive without `TEXCOORD_0`);
+//! - `colors` (float64 `K×3` or `K×4`, alpha 1 for an RGB element in a
+//!   file that also has RGBA ones) and `corner_colors` (int64 `M×3`, as
+//!   `corner_uv`): glTF `COLOR_0`, normalized integers as 0..1;
 //! - `vertex_colors` (float64 `N×3` or `N×4`, values as the file writes
 //!   them): OBJ `v x y z r g b`, PLY `red green blue [alpha]`, OFF colours;
 //! - `vertex_properties` / `face_properties` (dict name → float64 array):
@@ -22,12 +29,15 @@
 //!
 //! Writing compares each editable array with the one [`FileAttributes`]
 //! gives and changes only what differs (text tails of unchanged vertices
-//! stay byte for byte as read); read-only entries must be unchanged.
+//! stay byte for byte as read); read-only entries must be unchanged. The
+//! glTF entries are read-only (the writer passes the accessors through as
+//! read).
 
 use normalnet_mesh::Attributes;
+use normalnet_mesh::MeshError;
 use normalnet_mesh::io::attributes::{
-    GltfContainer, ObjAttributes, OffAttributes, PlyAttributes, PlyColumn, PlyEncoding, PlyKind,
-    PlyScalar, StlEncoding,
+    GltfAttributes, GltfContainer, ObjAttributes, OffAttributes, PlyAttributes, PlyColumn,
+    PlyEncoding, PlyKind, PlyScalar, StlEncoding,
 };
 use normalnet_mesh::io::{FormatAttributes, NO_INDEX};
 use numpy::ndarray::{Array1, Array2};
@@ -179,6 +189,58 @@ fn obj_corner_uv(polygon_sizes: &[u32], obj: &ObjAttributes) -> Vec<i64> {
     out
 }
 
+/// The per-corner entries of glTF: (values key, corner key, vertex
+/// attribute, what fills the components an element lacks: UV 0, alpha 1).
+const GLTF_CORNER_KEYS: [(&str, &str, &str, f64); 2] = [
+    ("uv", "corner_uv", "TEXCOORD_0", 0.0),
+    ("colors", "corner_colors", "COLOR_0", 1.0),
+];
+
+/// A glTF vertex attribute as the dict's pair: its values as a table as
+/// wide as the widest element (the others filled with `fill`), and per
+/// mesh triangle the row of each corner (−1: none). `None` when no
+/// primitive has it; `Err` (the message) when its accessors are broken.
+fn gltf_corner_table(
+    gltf: &GltfAttributes,
+    attribute: &str,
+    fill: f64,
+) -> Result<Option<(Table, Vec<i64>)>, String> {
+    let found = gltf.corner_values(attribute).map_err(|e| match e {
+        MeshError::Parse { message, .. } => message,
+        e => e.to_string(),
+    })?;
+    let Some(found) = found else {
+        return Ok(None);
+    };
+    let cols = found.values.iter().map(Vec::len).max().unwrap_or(2);
+    let mut data = Vec::with_capacity(found.values.len() * cols);
+    for v in &found.values {
+        data.extend((0..cols).map(|k| v.get(k).copied().unwrap_or(fill)));
+    }
+    let corners = found
+        .corners
+        .iter()
+        .flatten()
+        .map(|&i| if i == NO_INDEX { -1 } else { i64::from(i) })
+        .collect();
+    Ok(Some((Table { cols, data }, corners)))
+}
+
+/// The per-corner table of `key` (`uv`, `colors`) of a glTF file, for the
+/// check of an edit: `None` when the file is no glTF file or has no such
+/// attribute; a broken attribute is a ValueError naming `key`.
+fn gltf_entry(a: &Attributes, key: &str) -> PyResult<Option<(Table, Vec<i64>)>> {
+    let FormatAttributes::Gltf(gltf) = &a.content else {
+        return Ok(None);
+    };
+    let (_, _, attribute, fill) = GLTF_CORNER_KEYS
+        .into_iter()
+        .find(|(values, corners, ..)| key == *values || key == *corners)
+        .expect("a glTF corner key");
+    gltf_corner_table(gltf, attribute, fill)
+        .map_err(|e| value_error(format!("{key}: the file's {attribute} cannot be read: {e}")))
+}
+
 /// Where a file keeps its vertex colours.
 enum ColorSource {
     /// OBJ: the last 3 numbers of each `v` tail (`[w] r g b`)
@@ -325,15 +387,36 @@ pub(crate) fn attributes_dict<'py>(
     }
     let sizes: Vec<i64> = a.polygon_sizes.iter().map(|&n| i64::from(n)).collect();
     dict.set_item("polygon_sizes", Array1::from_vec(sizes).into_pyarray(py))?;
-    dict.set_item("warnings", file.warnings.clone())?;
+    let mut warnings = file.warnings.clone();
+    let corner_array = |corners: Vec<i64>| {
+        Array2::from_shape_vec((corners.len() / 3, 3), corners)
+            .expect("M×3")
+            .into_pyarray(py)
+    };
     if let FormatAttributes::Obj(obj) = &a.content
         && let Some(uv) = obj_uv(obj)
     {
         dict.set_item("uv", uv.to_array(py))?;
         let corners = obj_corner_uv(&a.polygon_sizes, obj);
-        let corners = Array2::from_shape_vec((corners.len() / 3, 3), corners).expect("M×3");
-        dict.set_item("corner_uv", corners.into_pyarray(py))?;
+        dict.set_item("corner_uv", corner_array(corners))?;
     }
+    if let FormatAttributes::Gltf(gltf) = &a.content {
+        for (values_key, corners_key, attribute, fill) in GLTF_CORNER_KEYS {
+            match gltf_corner_table(gltf, attribute, fill) {
+                Ok(None) => {}
+                Ok(Some((values, corners))) => {
+                    dict.set_item(values_key, values.to_array(py))?;
+                    dict.set_item(corners_key, corner_array(corners))?;
+                }
+                // the mesh is fine and the accessor is written back as read:
+                // the entry is left out, the warnings say why
+                Err(e) => warnings.push(format!(
+                    "{attribute} is not in the dict ({values_key}, {corners_key}): {e}"
+                )),
+            }
+        }
+    }
+    dict.set_item("warnings", warnings)?;
     if let Some(source) = color_source(a) {
         dict.set_item("vertex_colors", read_colors(a, &source).to_array(py))?;
     }
@@ -384,6 +467,20 @@ fn check_unchanged_ints(
         return Err(value_error(format!(
             "{key}: cannot be edited (it describes the file read); \
              pass it as read_mesh returned it"
+        )));
+    }
+    Ok(())
+}
+
+/// A float64 array that must equal `original` (a read-only entry; NaN
+/// equals NaN).
+fn check_unchanged_floats(value: &Bound<'_, PyAny>, key: &str, original: &Table) -> PyResult<()> {
+    let new = table_edit(value, key, &[original.rows(), original.cols])?;
+    if let Some(i) = (0..new.len()).find(|&i| !same(new[i], original.data[i])) {
+        return Err(value_error(format!(
+            "{key}: row {} differs from the file's: glTF {key} cannot be edited (the accessors \
+             are written back as read); pass it as read_mesh returned it",
+            i / original.cols
         )));
     }
     Ok(())
@@ -596,13 +693,15 @@ fn apply_uv(obj: &mut ObjAttributes, value: &Bound<'_, PyAny>) -> PyResult<()> {
 }
 
 /// The entries of the dict (besides `_file`).
-const KEYS: [&str; 9] = [
+const KEYS: [&str; 11] = [
     "format",
     "encoding",
     "polygon_sizes",
     "warnings",
     "uv",
     "corner_uv",
+    "colors",
+    "corner_colors",
     "vertex_colors",
     "vertex_properties",
     "face_properties",
@@ -645,7 +744,33 @@ pub(crate) fn apply_edits(
         let sizes: Vec<i64> = a.polygon_sizes.iter().map(|&n| i64::from(n)).collect();
         check_unchanged_ints(&value, "polygon_sizes", &sizes, &[sizes.len()])?;
     }
-    if let Some(value) = get("corner_uv")? {
+    // glTF: every per-corner entry is read-only
+    let gltf = matches!(a.content, FormatAttributes::Gltf(_));
+    for (values_key, corners_key, attribute, _) in GLTF_CORNER_KEYS {
+        let (values, corners) = (get(values_key)?, get(corners_key)?);
+        if !gltf || (values.is_none() && corners.is_none()) {
+            continue;
+        }
+        let Some((table, original)) = gltf_entry(&a, values_key)? else {
+            let key = if values.is_some() {
+                values_key
+            } else {
+                corners_key
+            };
+            return Err(value_error(format!(
+                "{key}: the file has no {attribute} (attributes cannot be added)"
+            )));
+        };
+        if let Some(value) = values {
+            check_unchanged_floats(&value, values_key, &table)?;
+        }
+        if let Some(value) = corners {
+            check_unchanged_ints(&value, corners_key, &original, &[original.len() / 3, 3])?;
+        }
+    }
+    if let Some(value) = get("corner_uv")?
+        && !gltf
+    {
         let original = match &a.content {
             FormatAttributes::Obj(obj) if !obj.texture_coords.is_empty() => {
                 obj_corner_uv(&a.polygon_sizes, obj)
@@ -658,7 +783,9 @@ pub(crate) fn apply_edits(
         };
         check_unchanged_ints(&value, "corner_uv", &original, &[original.len() / 3, 3])?;
     }
-    if let Some(value) = get("uv")? {
+    if let Some(value) = get("uv")?
+        && !gltf
+    {
         match &mut a.content {
             FormatAttributes::Obj(obj) => apply_uv(obj, &value)?,
             _ => {
@@ -666,6 +793,14 @@ pub(crate) fn apply_edits(
                     "uv: the file has no texture coordinates (attributes cannot be added)",
                 ));
             }
+        }
+    }
+    for key in ["colors", "corner_colors"] {
+        if get(key)?.is_some() && !gltf {
+            return Err(value_error(format!(
+                "{key}: only glTF files have per-corner colours (this file's are vertex_colors, \
+                 if any; attributes cannot be added)"
+            )));
         }
     }
     for (key, face) in [("vertex_properties", false), ("face_properties", true)] {

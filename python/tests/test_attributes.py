@@ -2,8 +2,12 @@
 what a file carries beyond positions and triangles, as numpy arrays, and
 the user's edits of it written back (issue 38)."""
 
+import base64
 import copy
+import json
 import struct
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -379,3 +383,170 @@ def test_denoise_trimesh_keeps_uv():
     assert out.visual.kind == "texture"
     np.testing.assert_array_equal(out.visual.uv, uv)
     np.testing.assert_array_equal(textured.visual.uv, uv)
+
+
+# glTF: a unit square of two triangle primitives, welded along the diagonal;
+# each has its own TEXCOORD_0 (a UV seam on the diagonal); COLOR_0 is float
+# RGB on the first and normalized unsigned-byte RGBA on the second.
+GLTF_POSITIONS = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=np.float64)
+GLTF_FACES = np.array([[0, 1, 2], [0, 2, 3]])
+GLTF_UV = np.array([[0, 0], [1, 0], [1, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]])
+GLTF_COLORS = np.array([[1, 0, 0, 1], [0, 1, 0, 1], [0, 0, 1, 1],
+                        [1, 0, 0, 1], [0, 1, 0, 51 / 255], [0, 0, 1, 0]])
+GLTF_CORNERS = np.array([[0, 1, 2], [3, 4, 5]])
+
+
+def gltf_document(second_colour=True):
+    """(JSON document, buffer bytes) of the square."""
+    bin_, views, accessors = bytearray(), [], []
+
+    def accessor(data, component_type, kind, count, normalized=False):
+        while len(bin_) % 4:
+            bin_.append(0)
+        views.append({"buffer": 0, "byteOffset": len(bin_), "byteLength": len(data)})
+        bin_.extend(data)
+        a = {"bufferView": len(views) - 1, "componentType": component_type, "count": count, "type": kind}
+        if normalized:
+            a["normalized"] = True
+        accessors.append(a)
+        return len(accessors) - 1
+
+    def floats(rows):
+        return struct.pack("<%df" % (len(rows) * len(rows[0])), *np.ravel(rows))
+
+    first = {
+        "POSITION": accessor(floats(GLTF_POSITIONS[[0, 1, 2]]), 5126, "VEC3", 3),
+        "TEXCOORD_0": accessor(floats(GLTF_UV[:3]), 5126, "VEC2", 3),
+        "COLOR_0": accessor(floats(GLTF_COLORS[:3, :3]), 5126, "VEC3", 3),
+    }
+    second = {
+        "POSITION": accessor(floats(GLTF_POSITIONS[[0, 2, 3]]), 5126, "VEC3", 3),
+        "TEXCOORD_0": accessor(floats(GLTF_UV[3:]), 5126, "VEC2", 3),
+    }
+    if second_colour:
+        rgba = bytes([255, 0, 0, 255, 0, 255, 0, 51, 0, 0, 255, 0])
+        second["COLOR_0"] = accessor(rgba, 5121, "VEC4", 3, normalized=True)
+    indices = accessor(struct.pack("<3H", 0, 1, 2), 5123, "SCALAR", 3)
+    while len(bin_) % 4:
+        bin_.append(0)
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": first}, {"attributes": second, "indices": indices}]}],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(bin_)}],
+    }
+    return doc, bytes(bin_)
+
+
+def gltf_bytes(doc, bin_, glb):
+    if not glb:
+        doc = copy.deepcopy(doc)
+        doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(bin_).decode()
+        return json.dumps(doc).encode()
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<I4s", len(text), b"JSON") + text + struct.pack("<I4s", len(bin_), b"BIN\0") + bin_
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
+
+
+@pytest.fixture(params=["gltf", "glb"])
+def gltf_file(tmp_path, request):
+    path = tmp_path / f"square.{request.param}"
+    path.write_bytes(gltf_bytes(*gltf_document(), glb=request.param == "glb"))
+    return path
+
+
+def test_gltf_uv_and_colors_per_corner(gltf_file):
+    v, f, a = normalnet.read_mesh(gltf_file, attributes=True)
+    np.testing.assert_array_equal(v, GLTF_POSITIONS)
+    np.testing.assert_array_equal(f, GLTF_FACES)
+    assert a["format"] == "gltf" and a["encoding"] == ("binary" if gltf_file.suffix == ".glb" else "json")
+    assert a["warnings"] == []
+    assert a["uv"].dtype == np.float64 and a["uv"].shape == (6, 2)
+    np.testing.assert_array_equal(a["uv"], GLTF_UV)
+    assert a["corner_uv"].dtype == np.int64
+    np.testing.assert_array_equal(a["corner_uv"], GLTF_CORNERS)
+    # the welded diagonal (vertices 0 and 2) has a UV per side
+    assert a["uv"][a["corner_uv"][0, 0]].tolist() != a["uv"][a["corner_uv"][1, 0]].tolist()
+    assert a["colors"].dtype == np.float64 and a["colors"].shape == (6, 4)
+    np.testing.assert_array_equal(a["colors"], GLTF_COLORS)  # RGB gets alpha 1
+    np.testing.assert_array_equal(a["corner_colors"], GLTF_CORNERS)
+    assert "vertex_colors" not in a
+
+
+def test_gltf_primitive_without_colors_has_no_corner_colors(tmp_path):
+    path = tmp_path / "half.gltf"
+    path.write_bytes(gltf_bytes(*gltf_document(second_colour=False), glb=False))
+    _, _, a = normalnet.read_mesh(path, attributes=True)
+    np.testing.assert_array_equal(a["colors"], GLTF_COLORS[:3, :3])
+    np.testing.assert_array_equal(a["corner_colors"], [[0, 1, 2], [-1, -1, -1]])
+    np.testing.assert_array_equal(a["corner_uv"], GLTF_CORNERS)
+
+
+def test_gltf_seed_file_has_uv_per_corner():
+    seed = Path(__file__).resolve().parents[2] / "fuzz" / "seeds" / "gltf" / "plate-two-primitives.glb"
+    if not seed.exists():
+        pytest.skip(f"{seed} is missing")
+    v, f, a = normalnet.read_mesh(seed, attributes=True)
+    assert a["corner_uv"].shape == f.shape and a["uv"].shape[1] == 2
+    assert a["corner_uv"].min() >= 0 and a["corner_uv"].max() < len(a["uv"])
+    assert "colors" not in a and "corner_colors" not in a
+
+
+def test_gltf_round_trip_keeps_uv_and_colors_and_they_are_read_only(gltf_file, tmp_path):
+    v, f, a = normalnet.read_mesh(gltf_file, attributes=True)
+    moved = v + np.array([0.5, -0.25, 0.125])
+    out = tmp_path / f"out{gltf_file.suffix}"
+    normalnet.write_mesh(out, moved, f, attributes=a)
+    v2, f2, a2 = normalnet.read_mesh(out, attributes=True)
+    np.testing.assert_array_equal(v2, moved)
+    np.testing.assert_array_equal(f2, f)
+    assert_same_attributes(a, a2)
+    never = tmp_path / f"never{gltf_file.suffix}"
+    for key, change, message in [
+        ("uv", lambda x: x + 0.25, "uv: row 0 differs.*cannot be edited"),
+        ("colors", lambda x: x[:, :3], r"colors: shape \[6, 3\] differs"),
+        ("corner_uv", lambda x: x[::-1], "corner_uv: cannot be edited"),
+        ("corner_colors", lambda x: np.zeros_like(x), "corner_colors: cannot be edited"),
+    ]:
+        b = copy.deepcopy(a)
+        b[key] = change(b[key])
+        with pytest.raises(ValueError, match=message):
+            normalnet.write_mesh(never, v, f, attributes=b)
+    assert not never.exists()
+
+
+def test_gltf_keys_cannot_be_added(obj_file, tmp_path):
+    doc, bin_ = gltf_document()
+    for prim in doc["meshes"][0]["primitives"]:
+        del prim["attributes"]["COLOR_0"]
+    plain = tmp_path / "plain.gltf"
+    plain.write_bytes(gltf_bytes(doc, bin_, glb=False))
+    v, f, a = normalnet.read_mesh(plain, attributes=True)
+    assert "colors" not in a and "uv" in a
+    for key in ("colors", "corner_colors"):
+        with pytest.raises(ValueError, match=f"{key}: the file has no COLOR_0"):
+            normalnet.write_mesh(tmp_path / "never.gltf", v, f, attributes=dict(a, **{key: np.zeros((3, 3))}))
+    v, f, a = normalnet.read_mesh(obj_file, attributes=True)
+    with pytest.raises(ValueError, match="colors: only glTF files"):
+        normalnet.write_mesh(tmp_path / "never.obj", v, f, attributes=dict(a, colors=np.zeros((5, 3))))
+
+
+def test_gltf_broken_texcoord_is_a_warning_not_an_error(tmp_path):
+    doc, bin_ = gltf_document()
+    doc["accessors"][doc["meshes"][0]["primitives"][1]["attributes"]["TEXCOORD_0"]]["type"] = "SCALAR"
+    doc["accessors"][doc["meshes"][0]["primitives"][1]["attributes"]["TEXCOORD_0"]]["count"] = 3
+    path = tmp_path / "broken.gltf"
+    path.write_bytes(gltf_bytes(doc, bin_, glb=False))
+    v, f, a = normalnet.read_mesh(path, attributes=True)
+    np.testing.assert_array_equal(f, GLTF_FACES)
+    assert "uv" not in a and "corner_uv" not in a
+    assert any("TEXCOORD_0 is not in the dict" in w and "SCALAR" in w for w in a["warnings"])
+    np.testing.assert_array_equal(a["colors"], GLTF_COLORS)
+    out = tmp_path / "out.gltf"
+    normalnet.write_mesh(out, v, f, attributes=a)  # written back as read
+    assert json.loads(out.read_text())["accessors"] == doc["accessors"]

@@ -100,8 +100,11 @@ fn count_outputs(dir: &Path) -> usize {
 #[ignore = "long: 2,000 files, about a minute"]
 fn issue_39_a_batch_of_2000_files_with_2_percent_broken() {
     let dir = tempfile::tempdir().unwrap();
-    let inputs = dir.path().join("in");
-    std::fs::create_dir(&inputs).unwrap();
+    // LONG_BATCH_INPUTS=DIR keeps the inputs there, e.g. for the Python
+    // run of the same files (docs/robustness.md)
+    let inputs =
+        std::env::var_os("LONG_BATCH_INPUTS").map_or_else(|| dir.path().join("in"), PathBuf::from);
+    std::fs::create_dir_all(&inputs).unwrap();
     let kinds = broken_kinds();
     let formats = ["obj", "off", "ply", "stl"];
     let mut good = Vec::new();

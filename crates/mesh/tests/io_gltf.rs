@@ -3,12 +3,13 @@
 //! with a base-colour texture, under a TRS node tree) read as one welded
 //! mesh, written back unchanged (same document, same buffer bytes) and
 //! moved (positions back in local space, normals recomputed, tangents
-//! dropped, everything else untouched), in both containers; and the errors
-//! of broken files, each naming the file and the element.
+//! dropped, everything else untouched), in both containers; its UVs and
+//! colours per triangle corner of the welded mesh; and the errors of
+//! broken files, each naming the file and the element.
 
-use normalnet_mesh::io::attributes::{FormatAttributes, GltfAttributes};
+use normalnet_mesh::io::attributes::{FormatAttributes, GltfAttributes, GltfCornerValues};
 use normalnet_mesh::io::{
-    FileWriteOptions, Format, MeshFile, encode_mesh_file, parse_mesh, parse_mesh_file,
+    FileWriteOptions, Format, MeshFile, NO_INDEX, encode_mesh_file, parse_mesh, parse_mesh_file,
     read_mesh_file, write_mesh_as, write_mesh_file, write_mesh_file_as,
 };
 use normalnet_mesh::{Mesh, Topology, vec3};
@@ -852,4 +853,208 @@ fn missing_buffer_file_is_an_error_and_missing_image_a_warning() {
         e.contains("plate.gltf") && e.contains("buffers[0]: cannot read"),
         "{e}"
     );
+}
+
+/// Appends an accessor of `count` elements of `kind` stored as `bytes` to
+/// the plate's document and buffer (a GLB's BIN chunk); returns its index.
+fn append_accessor(
+    doc: &mut Value,
+    bin: &mut Vec<u8>,
+    bytes: &[u8],
+    (component_type, kind, count): (u32, &str, usize),
+    normalized: bool,
+) -> usize {
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let views = doc["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len() }));
+    let view = views.len() - 1;
+    bin.extend_from_slice(bytes);
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    let accessors = doc["accessors"].as_array_mut().unwrap();
+    let mut a = json!({
+        "bufferView": view, "componentType": component_type, "count": count, "type": kind
+    });
+    if normalized {
+        a["normalized"] = json!(true);
+    }
+    accessors.push(a);
+    accessors.len() - 1
+}
+
+/// The accessor of attribute `name` of primitive `p` of the plate.
+fn attribute_of(doc: &Value, p: usize, name: &str) -> usize {
+    doc["meshes"][0]["primitives"][p]["attributes"][name]
+        .as_u64()
+        .unwrap() as usize
+}
+
+/// Checks that every corner's value is an element of its own primitive's
+/// accessor, at the very element of the `POSITION` accessor that gave the
+/// mesh vertex at that corner (winding included); returns, per primitive,
+/// the index of its accessor's element 0 in `cv.values` (`None` without
+/// the attribute).
+fn check_corners(mesh: &Mesh, g: &GltfAttributes, cv: &GltfCornerValues) -> Vec<Option<u32>> {
+    assert_eq!(cv.corners.len(), mesh.num_faces());
+    let mut bases = Vec::new();
+    let mut f = 0;
+    for p in &g.primitives {
+        let vertices = &g.positions[p.positions].vertices;
+        let first = cv.corners[f][0];
+        // corner 0 is the file's corner 0 (a mirror swaps 1 and 2)
+        let base = (first != NO_INDEX).then(|| first - p.triangles[0][0]);
+        for _ in &p.triangles {
+            for k in 0..3 {
+                match base {
+                    None => assert_eq!(cv.corners[f][k], NO_INDEX),
+                    Some(base) => {
+                        let e = (cv.corners[f][k] - base) as usize;
+                        assert_eq!(vertices[e], mesh.faces[f][k], "face {f} corner {k}");
+                    }
+                }
+            }
+            f += 1;
+        }
+        bases.push(base);
+    }
+    assert_eq!(f, mesh.num_faces());
+    bases
+}
+
+#[test]
+fn uv_and_colours_per_corner_follow_the_welded_triangles() {
+    let (mut doc, mut bin) = plate(true);
+    // COLOR_0 on primitive 1 only: normalized unsigned bytes, RGBA
+    let count = (N - SEAM) * N;
+    let colours: Vec<u8> = (0..count).flat_map(|e| [e as u8, 255, 0, 51]).collect();
+    let colour = append_accessor(&mut doc, &mut bin, &colours, (5121, "VEC4", count), true);
+    doc["meshes"][0]["primitives"][1]["attributes"]["COLOR_0"] = json!(colour);
+    let file = parse_mesh_file(&glb_bytes(&doc, &bin), Format::Glb, Path::new("c.glb")).unwrap();
+    let (mesh, g) = (&file.mesh, gltf(&file));
+
+    let uv = g.corner_values("TEXCOORD_0").unwrap().unwrap();
+    let bases = check_corners(mesh, g, &uv);
+    assert_eq!(bases, [Some(0), Some(((SEAM + 1) * N) as u32)]);
+    // the values are the accessors' elements, primitive 0's first
+    let mut want: Vec<Vec<f64>> = Vec::new();
+    for p in 0..2 {
+        let elements = floats(&doc, &bin, attribute_of(&doc, p, "TEXCOORD_0"));
+        want.extend(
+            elements
+                .iter()
+                .map(|e| e.iter().map(|&x| f64::from(x)).collect()),
+        );
+    }
+    assert_eq!(uv.values, want);
+    // the seam column's vertices are at corners of both primitives, with two
+    // value indices (one per primitive) and, the plate's UVs being
+    // continuous, the same value
+    let mut seen: std::collections::HashMap<u32, Vec<u32>> = Default::default();
+    for (face, corners) in mesh.faces.iter().zip(&uv.corners) {
+        for (v, c) in face.iter().zip(corners) {
+            seen.entry(*v).or_default().push(*c);
+        }
+    }
+    let mut seam = 0;
+    for indices in seen.values() {
+        let value = &uv.values[indices[0] as usize];
+        assert!(indices.iter().all(|&i| &uv.values[i as usize] == value));
+        seam += usize::from(indices.iter().any(|&i| i != indices[0]));
+    }
+    assert_eq!(seam, N);
+
+    let colour = g.corner_values("COLOR_0").unwrap().unwrap();
+    assert_eq!(check_corners(mesh, g, &colour), [None, Some(0)]);
+    assert_eq!(colour.values.len(), count);
+    for (e, value) in colour.values.iter().enumerate() {
+        assert_eq!(value, &[e as f64 / 255.0, 1.0, 0.0, 0.2]);
+    }
+    assert_eq!(g.corner_values("COLOR_1").unwrap(), None);
+    assert_eq!(g.corner_values("NORMAL").unwrap().unwrap().values.len(), 42);
+}
+
+#[test]
+fn corner_values_turn_over_with_the_triangles_under_a_mirror() {
+    let (mut doc, bin) = plate(true);
+    doc["nodes"][0]["scale"] = json!([-1.0, 1.0, 1.0]);
+    let file = parse_mesh_file(&glb_bytes(&doc, &bin), Format::Glb, Path::new("m.glb")).unwrap();
+    let g = gltf(&file);
+    let uv = g.corner_values("TEXCOORD_0").unwrap().unwrap();
+    check_corners(&file.mesh, g, &uv);
+    let [a, b, c] = g.primitives[0].triangles[0];
+    assert_eq!(uv.corners[0], [a, c, b]);
+}
+
+#[test]
+fn corner_values_of_a_glb_from_another_format_are_absent() {
+    let mesh = parse_mesh(
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        Format::Obj,
+        Path::new("t.obj"),
+    )
+    .unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let glb = tmp.path().join("t.glb");
+    write_mesh_as(&glb, &mesh, Format::Glb, &Default::default()).unwrap();
+    let file = read_mesh_file(&glb).unwrap();
+    for name in ["TEXCOORD_0", "COLOR_0"] {
+        assert_eq!(gltf(&file).corner_values(name).unwrap(), None);
+    }
+}
+
+#[test]
+fn broken_attribute_accessors_are_errors_naming_the_primitive() {
+    let (doc, bin) = plate(true);
+    let count = (N - SEAM) * N;
+    for (bytes, layout, want) in [
+        (
+            vec![0u8; 4 * count],
+            (5126, "SCALAR", count),
+            "meshes[0].primitives[1]: TEXCOORD_0 accessors[10] has type \"SCALAR\", not VEC2, \
+             VEC3 or VEC4",
+        ),
+        (
+            vec![0u8; 8 * 3],
+            (5126, "VEC2", 3),
+            "meshes[0].primitives[1]: TEXCOORD_0 accessors[10] has 3 elements, its POSITION has 18",
+        ),
+        (
+            vec![0u8; 8],
+            (5126, "VEC2", count),
+            "meshes[0].primitives[1]: TEXCOORD_0: accessors[10] (18 elements of 8 bytes",
+        ),
+    ] {
+        let (mut doc, mut bin) = (doc.clone(), bin.clone());
+        let index = append_accessor(&mut doc, &mut bin, &bytes, layout, false);
+        assert_eq!(index, 10);
+        doc["meshes"][0]["primitives"][1]["attributes"]["TEXCOORD_0"] = json!(index);
+        let file =
+            parse_mesh_file(&glb_bytes(&doc, &bin), Format::Glb, Path::new("b.glb")).unwrap();
+        let e = gltf(&file)
+            .corner_values("TEXCOORD_0")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "want {want:?}, got {e:?}");
+        // the mesh and the other attributes are still read
+        assert!(gltf(&file).corner_values("NORMAL").unwrap().is_some());
+    }
+    // an accessor shared by primitives of different vertex counts
+    let mut doc = doc;
+    let shared = attribute_of(&doc, 0, "TEXCOORD_0");
+    doc["meshes"][0]["primitives"][1]["attributes"]["TEXCOORD_0"] = json!(shared);
+    let file = parse_mesh_file(&glb_bytes(&doc, &bin), Format::Glb, Path::new("s.glb")).unwrap();
+    let e = gltf(&file)
+        .corner_values("TEXCOORD_0")
+        .unwrap_err()
+        .to_string();
+    let want = format!(
+        "meshes[0].primitives[1]: TEXCOORD_0 accessors[{shared}] has {} elements, its POSITION \
+         has {count}",
+        (SEAM + 1) * N
+    );
+    assert!(e.contains(&want), "want {want:?}, got {e:?}");
 }

@@ -45,7 +45,8 @@
 //!   its moved vertices in place (local space, f32) and new `min`/`max`,
 //!   `NORMAL` is recomputed, `TANGENT` dropped with a warning; materials,
 //!   textures, images, UVs, colours, extensions and the buffer layout pass
-//!   through. Buffer files are written beside the output (`<stem>.bin`),
+//!   through (UVs and colours can be read per triangle corner with
+//!   [`GltfAttributes::corner_values`]). Buffer files are written beside the output (`<stem>.bin`),
 //!   image URIs rewritten relative to the output's folder; `.gltf` ↔
 //!   `.glb` converts the container (the glTF module documents the rest).
 //!
@@ -62,7 +63,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 pub use super::gltf::{
-    GltfAttributes, GltfBuffer, GltfBufferSource, GltfContainer, GltfPositions, GltfPrimitive,
+    GltfAttributes, GltfBuffer, GltfBufferSource, GltfContainer, GltfCornerValues, GltfPositions,
+    GltfPrimitive,
 };
 pub use super::obj::{ObjAttributes, ObjStatement};
 pub use super::off::OffAttributes;

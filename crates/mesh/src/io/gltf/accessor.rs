@@ -1,12 +1,16 @@
 //! Accessors and buffer views (glTF 2.0 §3.6 "Binary Data Storage"): where
 //! an accessor's elements lie in a buffer, checked against the bytes there
 //! are, and the element readers and writers of the few layouts this crate
-//! touches (`VEC3` of `FLOAT`, `SCALAR` indices).
+//! touches (`VEC3` of `FLOAT`, `SCALAR` indices, and any component as a
+//! number, normalized or not, for [`super::corners`]).
 
 use serde_json::{Map, Value};
 
 /// `componentType` of 32-bit floats.
 pub(crate) const FLOAT: u64 = 5126;
+/// `componentType` of signed bytes and shorts.
+pub(crate) const BYTE: u64 = 5120;
+pub(crate) const SHORT: u64 = 5122;
 /// `componentType` of unsigned bytes, shorts and ints (the index types).
 pub(crate) const UNSIGNED_BYTE: u64 = 5121;
 pub(crate) const UNSIGNED_SHORT: u64 = 5123;
@@ -220,6 +224,40 @@ pub(crate) fn read_index(buffer: &[u8], layout: &Layout, i: usize) -> u32 {
     }
 }
 
+/// Component `c` of element `i`, as a number: a float as read, an integer
+/// as read or, `normalized`, mapped as glTF 2.0 §3.11 says (unsigned
+/// `x / max` into 0..=1, signed `max(x / max, −1)` into −1..=1, `max` the
+/// largest value of the type).
+pub(crate) fn read_number(
+    buffer: &[u8],
+    layout: &Layout,
+    i: usize,
+    c: usize,
+    normalized: bool,
+) -> f64 {
+    let size = component_size(layout.component_type).unwrap_or(4);
+    let at = layout.at(i) + c * size;
+    let b = &buffer[at..at + size];
+    let (x, max) = match layout.component_type {
+        FLOAT => return f32::from_le_bytes([b[0], b[1], b[2], b[3]]).into(),
+        BYTE => (f64::from(b[0] as i8), f64::from(i8::MAX)),
+        UNSIGNED_BYTE => (f64::from(b[0]), f64::from(u8::MAX)),
+        SHORT => (
+            f64::from(i16::from_le_bytes([b[0], b[1]])),
+            f64::from(i16::MAX),
+        ),
+        UNSIGNED_SHORT => (
+            f64::from(u16::from_le_bytes([b[0], b[1]])),
+            f64::from(u16::MAX),
+        ),
+        _ => (
+            f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            f64::from(u32::MAX),
+        ),
+    };
+    if normalized { (x / max).max(-1.0) } else { x }
+}
+
 /// An f32 as the JSON number with the fewest digits that reads back to it
 /// (`0.1`, not `0.10000000149011612`).
 pub(crate) fn json_f32(x: f32) -> Value {
@@ -244,5 +282,74 @@ pub(crate) fn set_bounds(json: &mut Value, index: usize, values: &[[f32; 3]]) {
     if let Some(Value::Object(a)) = json.get_mut("accessors").and_then(|a| a.get_mut(index)) {
         a.insert("min".into(), Value::Array(lo.map(json_f32).to_vec()));
         a.insert("max".into(), Value::Array(hi.map(json_f32).to_vec()));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A layout of one element of `components` components of `component_type`
+    /// at byte 0.
+    fn one(component_type: u64, components: usize) -> Layout {
+        Layout {
+            buffer: 0,
+            offset: 0,
+            stride: 16,
+            count: 1,
+            component_type,
+            components,
+        }
+    }
+
+    #[test]
+    fn normalized_components_map_to_the_unit_range_as_the_spec_says() {
+        let bytes = [255u8, 0, 128, 129];
+        let l = one(UNSIGNED_BYTE, 4);
+        let got: Vec<f64> = (0..4)
+            .map(|c| read_number(&bytes, &l, 0, c, true))
+            .collect();
+        assert_eq!(got, [1.0, 0.0, 128.0 / 255.0, 129.0 / 255.0]);
+        // signed: −128 and −127 both map to −1
+        let l = one(BYTE, 4);
+        let got: Vec<f64> = (0..4)
+            .map(|c| read_number(&bytes, &l, 0, c, true))
+            .collect();
+        assert_eq!(got, [-1.0 / 127.0, 0.0, -1.0, -1.0]);
+        let shorts: Vec<u8> = [65535u16, 0, 32768, 1]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let l = one(UNSIGNED_SHORT, 4);
+        let got: Vec<f64> = (0..4)
+            .map(|c| read_number(&shorts, &l, 0, c, true))
+            .collect();
+        assert_eq!(got, [1.0, 0.0, 32768.0 / 65535.0, 1.0 / 65535.0]);
+        let l = one(SHORT, 4);
+        let got: Vec<f64> = (0..4)
+            .map(|c| read_number(&shorts, &l, 0, c, true))
+            .collect();
+        assert_eq!(got, [-1.0 / 32767.0, 0.0, -1.0, 1.0 / 32767.0]);
+        // not normalized: the integers as read
+        let got: Vec<f64> = (0..4)
+            .map(|c| read_number(&shorts, &l, 0, c, false))
+            .collect();
+        assert_eq!(got, [-1.0, 0.0, -32768.0, 1.0]);
+    }
+
+    #[test]
+    fn float_components_are_read_as_written_at_their_stride() {
+        let bytes: Vec<u8> = [0.25f32, -1.5, 7.0, 0.1]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let l = Layout {
+            stride: 8,
+            count: 2,
+            ..one(FLOAT, 2)
+        };
+        assert_eq!(read_number(&bytes, &l, 1, 0, false), 7.0);
+        assert_eq!(read_number(&bytes, &l, 1, 1, true), f64::from(0.1f32));
+        assert_eq!(read_number(&bytes, &l, 0, 1, false), -1.5);
     }
 }

@@ -3,7 +3,9 @@
 //! the containers ([`container`]), accessors ([`accessor`]) and node
 //! transforms ([`transform`]), with what a glTF file holds beyond the
 //! welded mesh the denoiser sees ([`GltfAttributes`], kept by
-//! [`super::read_mesh_file`]).
+//! [`super::read_mesh_file`]) and its vertex attributes per triangle
+//! corner of that mesh ([`GltfAttributes::corner_values`], in
+//! [`corners`]: texture coordinates, colours).
 //!
 //! Reading: every triangle primitive (`mode` 4 or absent) of every mesh a
 //! node of the scene (`scene`, else scene 0) places, each at its node's
@@ -46,10 +48,12 @@
 pub(crate) mod accessor;
 mod base64;
 pub(crate) mod container;
+pub(crate) mod corners;
 mod read;
 pub(crate) mod transform;
 mod write;
 
+pub use corners::GltfCornerValues;
 pub(super) use read::{parse, parse_with_attributes};
 pub(super) use write::{Output, check_range, encode_with_attributes, write};
 
