@@ -49,7 +49,7 @@ __all__ = [
 __version__ = _normalnet.__version__
 
 #: file name suffixes read and written (format chosen by the suffix)
-MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl")
+MESH_SUFFIXES = (".obj", ".off", ".ply", ".stl", ".gltf", ".glb")
 
 Mesh = Tuple[np.ndarray, np.ndarray]
 

@@ -52,7 +52,7 @@
 //!
 //! A mesh written in another format than it was read from (glTF and GLB
 //! count as one) keeps its
-//! positions and triangles only ([`write_mesh`]), with a warning naming what
+//! positions and triangles only ([`write_mesh`](super::write_mesh)), with a warning naming what
 //! was dropped. Warnings are returned, never printed: the caller decides.
 
 use super::{Format, WriteOptions, format_of, perr, strip_bom, write_atomically, write_mesh_as};

@@ -510,6 +510,8 @@ pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
 
 /// Iterates lines (without `\n` / `\r\n`) with 1-based numbers. A file
 /// without any `\n` but with `\r` (classic Mac line ends) is split at `\r`.
+/// Every `\r` at a line's end goes (`\r\r\n` too), so that a line kept
+/// verbatim reads back the same after it is written with `\n`.
 pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
     let sep = if !bytes.contains(&b'\n') && bytes.contains(&b'\r') {
         b'\r'
@@ -518,8 +520,8 @@ pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
     };
     let bytes = bytes.strip_suffix(&[sep]).unwrap_or(bytes);
     bytes.split(move |&b| b == sep).enumerate().map(|(i, l)| {
-        let l = l.strip_suffix(b"\r").unwrap_or(l);
-        (i + 1, l)
+        let end = l.iter().rposition(|&b| b != b'\r').map_or(0, |k| k + 1);
+        (i + 1, &l[..end])
     })
 }
 

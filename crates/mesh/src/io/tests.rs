@@ -262,7 +262,7 @@ fn ply_errors_name_the_problem() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("element edge 0") && e.contains("data ends early"),
+        e.contains("element edge") && e.contains("data ends early"),
         "{e}"
     );
     let ascii_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
@@ -751,4 +751,43 @@ fn gltf_formats_by_extension_and_name() {
         assert!(e.to_string().contains("vertex 1"), "{e}");
         assert!(encode_mesh(&far, format, &WriteOptions::default()).is_err());
     }
+}
+
+/// Found by fuzzing (fuzz/regressions/ply/read_ply_file-timeout-huge-element-count.ply):
+/// a header declaring ~4 billion instances with no data behind it is refused
+/// at once, not after looping over the count; an element without
+/// properties carries no data, whatever its count.
+#[test]
+fn ply_counts_the_data_cannot_hold_are_refused_before_reading() {
+    let path = Path::new("big.ply");
+    for format in ["ascii", "binary_little_endian"] {
+        let head = format!(
+            "ply\nformat {format} 1.0\nelement vertex 4294967295\nproperty float x\n\
+             property float y\nproperty float z\nend_header\n"
+        );
+        let started = std::time::Instant::now();
+        let e = parse_mesh(head.as_bytes(), Format::Ply, path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("big.ply") && e.contains("element vertex") && e.contains("data ends early"),
+            "{e}"
+        );
+        assert!(started.elapsed().as_secs() < 5, "took {:?}", started.elapsed());
+    }
+    let empty_element = "ply\nformat ascii 1.0\nelement nothing 4294967295\n\
+        element vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+        element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+        0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    let mesh = parse_mesh(empty_element.as_bytes(), Format::Ply, path).unwrap();
+    assert_eq!((mesh.num_vertices(), mesh.num_faces()), (3, 1));
+}
+
+/// Found by fuzzing (fuzz/regressions/obj/read_obj_file-roundtrip-not-idempotent.obj):
+/// a kept line ending in `\r\r\n` lost one `\r` per write → read round.
+#[test]
+fn lines_drop_every_carriage_return_at_their_end() {
+    let text = b"# a\r\r\nv 0 0 0\r\n# b\r \r\n";
+    let got: Vec<&[u8]> = lines(text).map(|(_, l)| l).collect();
+    assert_eq!(got, [&b"# a"[..], b"v 0 0 0", b"# b\r "]);
 }

@@ -53,6 +53,16 @@ impl Scalar {
     pub fn is_int(self) -> bool {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
+
+    /// Bytes of one value in a binary file.
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
 }
 
 /// The type of a PLY property.
@@ -77,6 +87,21 @@ struct Element {
     name: String,
     count: usize,
     props: Vec<Property>,
+}
+
+impl Element {
+    /// The fewest bytes one instance can take: each binary value's size (a
+    /// list's count only, as it may be empty); in ASCII one character per
+    /// value.
+    fn smallest_instance(&self, encoding: Encoding) -> usize {
+        self.props
+            .iter()
+            .map(|p| match (encoding, p.kind) {
+                (Encoding::Ascii, _) => 1,
+                (_, Kind::Scalar(t) | Kind::List(t, _)) => t.size(),
+            })
+            .sum()
+    }
 }
 
 type Encoding = PlyEncoding;
@@ -366,6 +391,26 @@ fn parse_into(
             let (line, at) = src.place();
             perr(path, line, format!("element {} {i}{at}: {what}", el.name))
         };
+        // An element without properties carries no data; a count the rest
+        // of the file cannot hold is refused before looping over it.
+        if el.props.is_empty() {
+            continue;
+        }
+        let smallest = el.smallest_instance(h.encoding);
+        if el.count.saturating_mul(smallest) > src.remaining() {
+            let (line, at) = src.place();
+            return Err(perr(
+                path,
+                line,
+                format!(
+                    "element {}{at}: data ends early: the header declares {} instances of at least \
+                     {smallest} bytes each, but {} bytes follow (truncated file or wrong element count)",
+                    el.name,
+                    el.count,
+                    src.remaining()
+                ),
+            ));
+        }
         for i in 0..el.count {
             let mut p = [0.0; 3];
             for (pi, prop) in el.props.iter().enumerate() {
@@ -487,6 +532,8 @@ trait Source {
     fn place(&self) -> (usize, String);
     /// Description of data left after the last element, if any.
     fn leftover(&mut self) -> Option<String>;
+    /// Bytes not read yet.
+    fn remaining(&self) -> usize;
 }
 
 struct Binary<'a> {
@@ -529,6 +576,10 @@ impl Source for Binary<'_> {
 
     fn place(&self) -> (usize, String) {
         (0, format!(" (byte offset {})", self.pos))
+    }
+
+    fn remaining(&self) -> usize {
+        self.data.len() - self.pos
     }
 
     fn leftover(&mut self) -> Option<String> {
@@ -613,6 +664,10 @@ impl Source for Ascii<'_> {
 
     fn place(&self) -> (usize, String) {
         (self.line, String::new())
+    }
+
+    fn remaining(&self) -> usize {
+        self.data.len() - self.pos
     }
 
     fn leftover(&mut self) -> Option<String> {

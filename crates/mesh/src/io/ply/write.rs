@@ -202,6 +202,9 @@ pub(in crate::io) fn write_with_attributes(
         on_line: false,
     };
     for (ei, el) in ply.elements.iter().enumerate() {
+        if el.properties.is_empty() {
+            continue; // no data to write, however many instances
+        }
         let offsets: Vec<Option<Vec<usize>>> = el
             .properties
             .iter()
