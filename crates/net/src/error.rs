@@ -65,9 +65,12 @@ pub enum NetError {
     /// An error from the mesh crate (reading a training mesh, ...).
     #[error(transparent)]
     Mesh(#[from] normalnet_mesh::MeshError),
-    /// An error from the voxel crate (voxelizer, samples, shapes).
+    /// An error from the voxel crate (voxelizer, shapes).
     #[error(transparent)]
     Voxel(#[from] normalnet_voxel::VoxelError),
+    /// An error building training samples.
+    #[error(transparent)]
+    Samples(#[from] normalnet_samples::SampleError),
     /// An error from the filters crate.
     #[error(transparent)]
     Filter(#[from] normalnet_filters::FilterError),

@@ -4,7 +4,7 @@
 //! `[a_k, b_k]` of [`INTERVALS`]) is trained on samples of the meshes
 //! `M_{a_k}`: (voxel grid of face f with random yaw, the six GT-guided GNF
 //! targets of f in the same frame), balanced over the four `A_p` categories
-//! and built on the fly by loader threads (`normalnet_voxel::Loader`). Loss
+//! and built on the fly by loader threads (`normalnet_samples::Loader`). Loss
 //! MSE, Adam (0.9, 0.999, 1e-8), lr `base · 0.96^(step / 5000)`, batch 80.
 //! After network k is trained, `M_{a_{k+1}}` is made by running network k
 //! (μ_g 0.4, N_v 20) `a_{k+1} − a_k` times on `M_{a_k}` — network k is the one
@@ -33,7 +33,8 @@ use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::noise::add_noise_mixture;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Mesh, NoProgress, NoiseParams, Progress, Topology};
-use normalnet_voxel::{BalancedSampler, Loader, LoaderConfig, SampleSource, VoxelParams};
+use normalnet_samples::{BalancedSampler, Loader, LoaderConfig, SampleSource};
+use normalnet_voxel::VoxelParams;
 use serde::{Deserialize, Serialize};
 
 use crate::NetError;

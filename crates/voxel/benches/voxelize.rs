@@ -1,19 +1,15 @@
 //! Benchmarks: voxelized faces per second on one core (Fandisk0.3 when the
 //! data is present, else a procedural shape) for each preset, the
-//! per-mesh precomputation, and loader samples per second with 2 workers
-//! (procedural shapes with generated noise: training-like data, no test
-//! model). Run: `cargo bench -p normalnet-voxel --bench voxelize`.
+//! per-mesh precomputation (the training loader's bench is in
+//! `normalnet-samples`). Run: `cargo bench -p normalnet-voxel --bench voxelize`.
 #![allow(missing_docs)] // criterion's generated functions
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use normalnet_mesh::noise::{NoiseParams, add_noise};
 use normalnet_mesh::{Mesh, Topology};
 use normalnet_voxel::shapes::generate_seeded;
-use normalnet_voxel::{
-    BalancedSampler, Loader, LoaderConfig, MU_GS, SampleSource, Scratch, VoxelParams, Voxelizer,
-};
+use normalnet_voxel::{Scratch, VoxelParams, Voxelizer};
 use std::hint::black_box;
-use std::sync::Arc;
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
 
@@ -66,45 +62,5 @@ fn voxelize(c: &mut Criterion) {
     group.finish();
 }
 
-fn loader(c: &mut Criterion) {
-    let sources: Vec<SampleSource> = (0..3u64)
-        .map(|seed| {
-            let clean = generate_seeded(seed * 3 + 1, 4000).unwrap();
-            let noisy = add_noise(
-                &clean,
-                &NoiseParams {
-                    level: 0.3,
-                    seed,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-            SampleSource::new(noisy, &clean, VoxelParams::lite(), &MU_GS).unwrap()
-        })
-        .collect();
-    let sampler = BalancedSampler::new(&sources);
-    let items = sampler.draw_count_seeded(800, 0);
-    let sources = Arc::new(sources);
-    let mut group = c.benchmark_group("loader_lite_batch80");
-    group.sample_size(10);
-    group.throughput(Throughput::Elements(items.len() as u64));
-    group.bench_function("2_workers", |b| {
-        b.iter(|| {
-            let config = LoaderConfig {
-                batch_size: 80,
-                workers: 2,
-                seed: 1,
-                ..Default::default()
-            };
-            let mut n = 0;
-            for batch in Loader::new(Arc::clone(&sources), items.clone(), config).unwrap() {
-                n += black_box(batch.grids.len());
-            }
-            n
-        })
-    });
-    group.finish();
-}
-
-criterion_group!(benches, voxelize, loader);
+criterion_group!(benches, voxelize);
 criterion_main!(benches);

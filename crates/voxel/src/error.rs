@@ -1,5 +1,5 @@
-//! `VoxelError`: everything that can go wrong voxelizing, building training
-//! samples, generating shapes or writing inspection files.
+//! `VoxelError`: everything that can go wrong voxelizing, generating shapes
+//! or writing inspection files.
 
 use normalnet_mesh::MeshError;
 use std::path::PathBuf;
@@ -38,9 +38,6 @@ pub enum VoxelError {
         /// vertices in the mesh
         mesh_vertices: usize,
     },
-    /// The noisy and the clean mesh of a training pair differ in connectivity.
-    #[error("noisy and clean meshes do not match: {0}")]
-    PairMismatch(String),
     /// A face index is out of range.
     #[error("face {face} out of range (the mesh has {num_faces} faces)")]
     FaceOutOfRange {
@@ -59,9 +56,6 @@ pub enum VoxelError {
         /// what is wrong
         message: String,
     },
-    /// A filter error (the GT-guided targets).
-    #[error(transparent)]
-    Filter(#[from] normalnet_filters::FilterError),
     /// A mesh error (construction, I/O).
     #[error(transparent)]
     Mesh(#[from] MeshError),

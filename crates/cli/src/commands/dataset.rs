@@ -15,9 +15,10 @@ use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_mesh::Progress;
 use normalnet_mesh::noise::{NoiseParams, add_noise};
+use normalnet_samples::source::{NUM_CATEGORIES, TARGET_LEN};
+use normalnet_samples::{BalancedSampler, Loader, LoaderConfig, MU_GS, SampleSource};
+use normalnet_voxel::VoxelParams;
 use normalnet_voxel::inspect::{grid_picture, write_npy, write_png};
-use normalnet_voxel::samples::{NUM_CATEGORIES, TARGET_LEN};
-use normalnet_voxel::{BalancedSampler, Loader, LoaderConfig, MU_GS, SampleSource, VoxelParams};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 

@@ -2,7 +2,8 @@
 
 mod common;
 use common::{grid_cube, noisy_copy};
-use normalnet_voxel::{BalancedSampler, Loader, LoaderConfig, MU_GS, SampleSource, VoxelParams};
+use normalnet_samples::{BalancedSampler, Loader, LoaderConfig, MU_GS, SampleSource};
+use normalnet_voxel::VoxelParams;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::collections::HashSet;

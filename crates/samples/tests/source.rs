@@ -3,8 +3,9 @@
 use normalnet_mesh::Topology;
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3;
-use normalnet_voxel::samples::{NO_CATEGORY, NUM_CATEGORIES};
-use normalnet_voxel::{MU_GS, SampleSource, VoxelError, VoxelParams};
+use normalnet_samples::source::{NO_CATEGORY, NUM_CATEGORIES};
+use normalnet_samples::{MU_GS, SampleError, SampleSource};
+use normalnet_voxel::VoxelParams;
 
 mod common;
 use common::{grid_cube, noisy_copy};
@@ -119,7 +120,7 @@ fn mismatched_pairs_and_bad_mu_are_rejected() {
     let a = grid_cube(3);
     let b = grid_cube(4);
     let err = SampleSource::new(a.clone(), &b, VoxelParams::tiny(), &MU_GS).unwrap_err();
-    assert!(matches!(err, VoxelError::PairMismatch(_)), "{err}");
+    assert!(matches!(err, SampleError::PairMismatch(_)), "{err}");
     let mut c = a.clone();
     c.faces.swap(0, 1);
     let err = SampleSource::new(c, &a, VoxelParams::tiny(), &MU_GS).unwrap_err();

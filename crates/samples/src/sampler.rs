@@ -2,7 +2,7 @@
 //! counts per `A_p` category, pooled over several [`SampleSource`]s. Empty
 //! categories are skipped. Randomness comes from the caller's RNG.
 
-use crate::samples::{NUM_CATEGORIES, SampleSource};
+use crate::source::{NUM_CATEGORIES, SampleSource};
 use rand::Rng;
 use rand::seq::SliceRandom;
 

@@ -11,13 +11,11 @@
 //! Faces with a zero ground-truth normal (degenerate in the clean mesh) or a
 //! zero target are in no category: they are never sampled.
 
-use crate::error::VoxelError;
-use crate::frame::Frame;
-use crate::params::VoxelParams;
-use crate::voxelizer::{Scratch, Voxelizer};
+use crate::error::SampleError;
 use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Mesh, Topology};
+use normalnet_voxel::{Frame, Scratch, VoxelParams, Voxelizer};
 use rayon::prelude::*;
 
 /// The six `μ_g` of the network outputs (SPEC §6).
@@ -89,8 +87,8 @@ impl SampleSource {
     /// `mu_gs` must hold six values (usually [`MU_GS`]).
     ///
     /// # Errors
-    /// [`VoxelError::PairMismatch`] when the meshes differ in connectivity;
-    /// [`VoxelError::InvalidParameter`] when `mu_gs` has not six values or
+    /// [`SampleError::PairMismatch`] when the meshes differ in connectivity;
+    /// [`SampleError::InvalidParameter`] when `mu_gs` has not six values or
     /// one is not positive; errors of [`Voxelizer::new`] and of the target
     /// computation.
     pub fn new(
@@ -98,7 +96,7 @@ impl SampleSource {
         clean: &Mesh,
         params: VoxelParams,
         mu_gs: &[f64],
-    ) -> Result<SampleSource, VoxelError> {
+    ) -> Result<SampleSource, SampleError> {
         if noisy.num_vertices() != clean.num_vertices() || noisy.faces != clean.faces {
             let what = if noisy.num_vertices() != clean.num_vertices() {
                 format!(
@@ -120,15 +118,17 @@ impl SampleSource {
                     noisy.faces[f], clean.faces[f]
                 )
             };
-            return Err(VoxelError::PairMismatch(what));
+            return Err(SampleError::PairMismatch(what));
         }
         let mu: [f64; NUM_TARGETS] =
-            mu_gs.try_into().map_err(|_| VoxelError::InvalidParameter {
-                name: "mu_gs",
-                message: format!("expected {NUM_TARGETS} values of μ_g, got {}", mu_gs.len()),
-            })?;
+            mu_gs
+                .try_into()
+                .map_err(|_| SampleError::InvalidParameter {
+                    name: "mu_gs",
+                    message: format!("expected {NUM_TARGETS} values of μ_g, got {}", mu_gs.len()),
+                })?;
         if let Some(m) = mu.iter().find(|m| !(m.is_finite() && **m > 0.0)) {
-            return Err(VoxelError::InvalidParameter {
+            return Err(SampleError::InvalidParameter {
                 name: "mu_gs",
                 message: format!("μ_g = {m} must be finite and positive"),
             });

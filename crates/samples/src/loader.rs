@@ -7,10 +7,10 @@
 //! angles) depend only on the item list, the batch size and the seed, never
 //! on the number of workers or on timing.
 
-use crate::error::VoxelError;
+use crate::error::SampleError;
 use crate::sampler::SampleRef;
-use crate::samples::{SampleSource, TARGET_LEN};
-use crate::voxelizer::Scratch;
+use crate::source::{SampleSource, TARGET_LEN};
+use normalnet_voxel::Scratch;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
@@ -93,15 +93,15 @@ impl Loader {
     /// Starts the workers over `items` (in the given order; shuffle before).
     ///
     /// # Errors
-    /// [`VoxelError::InvalidParameter`] for a zero batch size or worker
+    /// [`SampleError::InvalidParameter`] for a zero batch size or worker
     /// count, sources with different grid parameters, or an item whose
     /// source or face is out of range.
     pub fn new(
         sources: Arc<Vec<SampleSource>>,
         items: Vec<SampleRef>,
         config: LoaderConfig,
-    ) -> Result<Loader, VoxelError> {
-        let invalid = |name, message: String| VoxelError::InvalidParameter { name, message };
+    ) -> Result<Loader, SampleError> {
+        let invalid = |name, message: String| SampleError::InvalidParameter { name, message };
         if config.batch_size == 0 {
             return Err(invalid("batch_size", "must be at least 1".into()));
         }
