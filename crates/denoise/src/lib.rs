@@ -24,6 +24,7 @@
 
 pub mod cnr;
 pub mod error;
+pub mod flags;
 pub mod normalnet;
 pub mod oracle;
 pub mod params;

@@ -30,7 +30,8 @@ use crate::mesh_output::write_result;
 use crate::output;
 use crate::progress::Bar;
 use anyhow::{Context, bail};
-use normalnet_denoise::params::{MAX_ITERATIONS, parse_assignment};
+use normalnet_denoise::flags::{FLAGS, FlagValue};
+use normalnet_denoise::params::parse_assignment;
 use normalnet_denoise::{Denoiser, METHODS, MethodInfo, Params};
 use normalnet_mesh::Mesh;
 use normalnet_mesh::io::{FileWriteOptions, check_encodable};
@@ -62,6 +63,16 @@ fn flag_help(flag: &str, text: &str) -> String {
     format!("{text} [defaults: {}]", defaults.join(", "))
 }
 
+/// The methods that take `flag`, comma-separated.
+fn takers(flag: &str) -> String {
+    let names: Vec<&str> = METHODS
+        .iter()
+        .filter(|m| m.flag_field(flag).is_some())
+        .map(|m| m.name)
+        .collect();
+    names.join(", ")
+}
+
 fn method_help() -> String {
     let lines: Vec<String> = METHODS
         .iter()
@@ -77,125 +88,103 @@ fn method_help() -> String {
     format!("Denoising method:\n{}", lines.join("\n"))
 }
 
-/// Parses the number of a parameter flag, refusing NaN and infinities with
-/// a message clap prefixes with the flag (serde would otherwise turn them
-/// into `null`: "invalid type: null, expected f64").
-pub fn finite_number(text: &str) -> Result<f64, String> {
-    let v: f64 = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("expected a number, got {text:?}"))?;
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(format!("must be a finite number, got {text:?}"))
+/// The method and its parameters: shared by `denoise` and `batch`. Its
+/// flags come from the registry's table (`normalnet_denoise::flags::FLAGS`),
+/// not typed here: `--method`, one flag per table entry, `--param`.
+#[derive(Clone, Debug)]
+pub struct MethodArgs {
+    /// the method's name as given
+    pub method: String,
+    /// the shorthand flags given, in table order, with the parameter value
+    /// each means (`--no-switch` → `false`)
+    pub flags: Vec<(&'static str, Value)>,
+    /// `--param KEY=VALUE`, in order
+    pub params: Vec<(String, Value)>,
+}
+
+impl clap::Args for MethodArgs {
+    fn augment_args(mut cmd: clap::Command) -> clap::Command {
+        use clap::{Arg, ArgAction};
+        cmd = cmd.arg(
+            Arg::new("method")
+                .long("method")
+                .short('m')
+                .default_value("normalnet")
+                .help("Denoising method")
+                .long_help(method_help())
+                .value_parser(clap::builder::PossibleValuesParser::new(method_names())),
+        );
+        for flag in FLAGS {
+            let help = match flag.value {
+                // a switch or a path has no default to show: say who takes it
+                FlagValue::Off | FlagValue::Path => {
+                    format!("{} [methods: {}]", flag.help, takers(flag.name))
+                }
+                _ => flag_help(flag.name, flag.help),
+            };
+            let arg = Arg::new(flag.name).long(flag.name).help(help);
+            cmd = cmd.arg(match flag.value {
+                FlagValue::Off => arg.action(ArgAction::SetTrue),
+                _ => arg
+                    .allow_negative_numbers(true)
+                    .value_parser(move |text: &str| flag.parse(text))
+                    .value_name(if flag.value == FlagValue::Path {
+                        "PATH"
+                    } else {
+                        "VALUE"
+                    }),
+            });
+        }
+        cmd.arg(
+            Arg::new("param")
+                .long("param")
+                .short('p')
+                .value_name("KEY=VALUE")
+                .action(ArgAction::Append)
+                .value_parser(parse_assignment)
+                .help(
+                    "Any parameter of the method, by its field name (see `--json` output for \
+                     the names), e.g. `--param fold_guard_cos=0` or `-p mu_g=0.3`; repeatable. \
+                     The value is read as JSON when it parses, else as text",
+                ),
+        )
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
     }
 }
 
-/// The method and its parameters: shared by `denoise` and `batch`.
-#[derive(clap::Args, Clone, Debug)]
-pub struct MethodArgs {
-    /// Denoising method.
-    #[arg(long, short, default_value = "normalnet", long_help = method_help(),
-          value_parser = clap::builder::PossibleValuesParser::new(method_names()))]
-    pub method: String,
-    /// N_f.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("iterations", &format!(
-        "Normal-filtering iterations N_f, at most {MAX_ITERATIONS} (normalnet: the most, see --auto-stop)")))]
-    pub iterations: Option<usize>,
-    /// NormalNet's auto stop.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("auto-stop",
-        "NormalNet stops after an iteration whose normals turned less than this many degrees on average (0: always N_f iterations, the paper's pipeline)"))]
-    pub auto_stop: Option<f64>,
-    /// N_v.
-    #[arg(long, allow_negative_numbers = true, help = flag_help("vertex-iterations", &format!(
-        "Vertex-update passes N_v, at most {MAX_ITERATIONS} (per iteration; bnf/sun07: after all normal passes)")))]
-    pub vertex_iterations: Option<usize>,
-    /// μ_g.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("mu-g",
-        "μ_g: width of the guidance range kernel (normalnet: the nearest trained output)"))]
-    pub mu_g: Option<f64>,
-    /// σ_s / d_s.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("sigma-s",
-        "Spatial kernel width σ_s in units of the mean centre distance d_s"))]
-    pub sigma_s: Option<f64>,
-    /// GNF radius / d_s.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("radius",
-        "Neighbourhood radius: gnf in units of d_s, vt (r) in units of the mean edge length l_e"))]
-    pub radius: Option<f64>,
-    /// BNF/BI σ_r.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("sigma-r",
-        "σ_r: range kernel width on normal differences (bnf) or on the vertex-normal guidance (bi)"))]
-    pub sigma_r: Option<f64>,
-    /// BI σ_n.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("sigma-n",
-        "BI σ_n: width of the kernel keeping a corner's vertex normal on its side of a feature"))]
-    pub sigma_n: Option<f64>,
-    /// VT ρ.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("rho",
-        "VT ρ: a neighbour votes only if n_i·n_j ≥ ρ"))]
-    pub rho: Option<f64>,
-    /// VT τ.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("tau",
-        "VT τ: binary-optimisation threshold on the normalised eigenvalues"))]
-    pub tau: Option<f64>,
-    /// Sun07 T.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("threshold",
-        "Sun07 threshold T on n_i·n_j"))]
-    pub threshold: Option<f64>,
-    /// L0 λ / l_e².
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("lambda",
-        "L0 λ in units of l_e² (mean edge length squared)"))]
-    pub lambda: Option<f64>,
-    /// L0 κ.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("kappa",
-        "L0 κ: growth of β per iteration"))]
-    pub kappa: Option<f64>,
-    /// L0 β_0.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("beta0", "L0 β_0: initial β"))]
-    pub beta0: Option<f64>,
-    /// L0 β_max.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("beta-max",
-        "L0 β_max: stop once β exceeds it (at most 1e8)"))]
-    pub beta_max: Option<f64>,
-    /// L0 α_0 / γ̄.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("alpha0",
-        "L0 α_0 in units of the mean dihedral angle γ̄"))]
-    pub alpha0: Option<f64>,
-    /// L0 μ_α.
-    #[arg(long, allow_negative_numbers = true, value_parser = finite_number, help = flag_help("alpha-decay",
-        "L0 μ_α: decay of α per iteration"))]
-    pub alpha_decay: Option<f64>,
-    /// NormalNet model bundle folder (default: `$NORMALNET_MODEL`, else the
-    /// bundle built into the program).
-    #[arg(long)]
-    pub model: Option<PathBuf>,
-    /// NormalNet: from this filtering iteration on, the network's normals
-    /// guide a joint-bilateral pass over the current normals (range width
-    /// μ_g, spatial 2·d_s) instead of being the filtered normals (0 = never:
-    /// the paper's form).
-    #[arg(long)]
-    pub guided_from: Option<usize>,
-    /// Any parameter of the method, by its field name (see `--json` output
-    /// for the names), e.g. `--param fold_guard_cos=0` or `-p mu_g=0.3`;
-    /// repeatable. The value is read as JSON when it parses, else as text.
-    #[arg(long = "param", short = 'p', value_name = "KEY=VALUE", value_parser = parse_assignment)]
-    pub params: Vec<(String, Value)>,
-    /// Switch off the fold guard of the vertex update (normalnet, gnf, bnf,
-    /// sun07, bi, vt; on by default: a vertex move may not fold a face over
-    /// against its filtered normal). Off reproduces the reference
-    /// implementations and the paper's NormalNet pipeline.
-    #[arg(long)]
-    pub no_fold_guard: bool,
-    /// NormalNet: the paper's form instead of the bundle's learned switch
-    /// (which blends, per face, the network's normal, a pass guided by it,
-    /// a GNF pass and the current normal).
-    #[arg(long)]
-    pub no_switch: bool,
-    /// NormalNet: f32 arithmetic throughout (default: the residual blocks'
-    /// 3³ convolutions in 8-bit integers where the CPU has AVX2 or AVX-512 VNNI).
-    #[arg(long = "f32")]
-    pub f32: bool,
+impl clap::FromArgMatches for MethodArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let flags = FLAGS
+            .iter()
+            .filter_map(|flag| match flag.value {
+                FlagValue::Off => m
+                    .get_flag(flag.name)
+                    .then_some((flag.name, Value::Bool(false))),
+                _ => m
+                    .get_one::<Value>(flag.name)
+                    .map(|v| (flag.name, v.clone())),
+            })
+            .collect();
+        Ok(MethodArgs {
+            method: m
+                .get_one::<String>("method")
+                .cloned()
+                .unwrap_or_else(|| "normalnet".into()),
+            flags,
+            params: m
+                .get_many::<(String, Value)>("param")
+                .map(|v| v.cloned().collect())
+                .unwrap_or_default(),
+        })
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
 }
 
 /// Arguments of `normalnet denoise`.
@@ -232,48 +221,12 @@ pub struct Args {
 /// their fields, then `--param`); a flag the method does not take is an
 /// error.
 pub fn given_params(args: &MethodArgs, info: &MethodInfo) -> anyhow::Result<Params> {
-    let num = |v: Option<f64>| v.map(Value::from);
-    let int = |v: Option<usize>| v.map(Value::from);
-    let given: [(&str, Option<Value>); 22] = [
-        ("iterations", int(args.iterations)),
-        ("auto-stop", num(args.auto_stop)),
-        ("vertex-iterations", int(args.vertex_iterations)),
-        ("mu-g", num(args.mu_g)),
-        ("sigma-s", num(args.sigma_s)),
-        ("radius", num(args.radius)),
-        ("sigma-r", num(args.sigma_r)),
-        ("sigma-n", num(args.sigma_n)),
-        ("rho", num(args.rho)),
-        ("tau", num(args.tau)),
-        ("threshold", num(args.threshold)),
-        ("lambda", num(args.lambda)),
-        ("kappa", num(args.kappa)),
-        ("beta0", num(args.beta0)),
-        ("beta-max", num(args.beta_max)),
-        ("alpha0", num(args.alpha0)),
-        ("alpha-decay", num(args.alpha_decay)),
-        (
-            "model",
-            args.model
-                .as_ref()
-                .map(|p| Value::from(p.display().to_string())),
-        ),
-        ("guided-from", int(args.guided_from)),
-        // a `no-` flag (and `--f32`) sets its boolean parameter to false
-        (
-            "no-fold-guard",
-            args.no_fold_guard.then_some(Value::Bool(false)),
-        ),
-        ("no-switch", args.no_switch.then_some(Value::Bool(false))),
-        ("f32", args.f32.then_some(Value::Bool(false))),
-    ];
     let mut params = Params::new();
-    for (flag, value) in given {
-        let Some(value) = value else { continue };
+    for (flag, value) in &args.flags {
         let Some(field) = info.flag_field(flag) else {
             bail!("--{flag} does not apply to --method {}", info.name);
         };
-        params.insert(field.to_string(), value);
+        params.insert(field.to_string(), value.clone());
     }
     for (key, value) in &args.params {
         params.insert(key.clone(), value.clone());
