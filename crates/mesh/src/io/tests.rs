@@ -789,3 +789,34 @@ fn lines_drop_every_carriage_return_at_their_end() {
     let got: Vec<&[u8]> = lines(text).map(|(_, l)| l).collect();
     assert_eq!(got, [&b"# a"[..], b"v 0 0 0", b"# b\r "]);
 }
+
+/// Found by fuzzing (fuzz/regressions/ply/read_ply_file-ascii-float-beyond-f32.ply):
+/// an ASCII value out of its property's type (1.5e119 in a `float`, 300 in
+/// a `uchar`) is refused, not written back as infinity or wrapped; a
+/// `float` written with more digits than an f32 keeps them through a write.
+#[test]
+fn ply_ascii_values_fit_their_types() {
+    use crate::io::{FileWriteOptions, encode_mesh_file, parse_mesh_file};
+    let path = Path::new("t.ply");
+    let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                property float z\nproperty uchar red\nelement face 1\n\
+                property list uchar int vertex_indices\nend_header\n";
+    let file = |first: &str| format!("{head}{first}\n1 0 0 0\n0 1 0 0\n3 0 1 2\n");
+    for (first, want) in [
+        ("0 1.5e119 0 0", "does not fit the property's type float"),
+        ("0 0 0 300", "does not fit the property's type uchar"),
+        ("0 0 0 -1", "does not fit the property's type uchar"),
+    ] {
+        let e = parse_mesh(file(first).as_bytes(), Format::Ply, path)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("t.ply:11") && e.contains(want), "{e}");
+    }
+    let precise = file("0.123456789012 0 0 255");
+    let read = parse_mesh_file(precise.as_bytes(), Format::Ply, path).unwrap();
+    assert_eq!(read.mesh.positions[0][0], 0.123456789012);
+    let written =
+        encode_mesh_file(&read.mesh, &read.attributes, &FileWriteOptions::default()).unwrap();
+    let again = parse_mesh_file(&written, Format::Ply, path).unwrap();
+    assert_eq!(again.mesh.positions, read.mesh.positions);
+}

@@ -54,6 +54,37 @@ impl Scalar {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
 
+    /// The type's name in a header (the older of the two spellings).
+    fn name(self) -> &'static str {
+        match self {
+            Scalar::I8 => "char",
+            Scalar::U8 => "uchar",
+            Scalar::I16 => "short",
+            Scalar::U16 => "ushort",
+            Scalar::I32 => "int",
+            Scalar::U32 => "uint",
+            Scalar::F32 => "float",
+            Scalar::F64 => "double",
+        }
+    }
+
+    /// Whether a value read from text is in the type's range (as the binary
+    /// form could hold it; NaN and infinities pass for the float types, where
+    /// the caller decides).
+    fn holds(self, v: f64) -> bool {
+        let (lo, hi) = match self {
+            Scalar::I8 => (i8::MIN as f64, i8::MAX as f64),
+            Scalar::U8 => (0.0, u8::MAX as f64),
+            Scalar::I16 => (i16::MIN as f64, i16::MAX as f64),
+            Scalar::U16 => (0.0, u16::MAX as f64),
+            Scalar::I32 => (i32::MIN as f64, i32::MAX as f64),
+            Scalar::U32 => (0.0, u32::MAX as f64),
+            Scalar::F32 => (f32::MIN as f64, f32::MAX as f64),
+            Scalar::F64 => return true,
+        };
+        !(v < lo || v > hi)
+    }
+
     /// Bytes of one value in a binary file.
     fn size(self) -> usize {
         match self {
@@ -646,6 +677,13 @@ impl Source for Ascii<'_> {
         let v = crate::io::parse_f64(tok).ok_or_else(|| format!("bad number {:?}", show(tok)))?;
         if t.is_int() && v.fract() != 0.0 {
             return Err(format!("{:?} is not an integer", show(tok)));
+        }
+        if !t.holds(v) {
+            return Err(format!(
+                "{:?} does not fit the property's type {}",
+                show(tok),
+                t.name()
+            ));
         }
         Ok(v)
     }

@@ -100,6 +100,11 @@ impl Values {
             Scalar::U16 => int!(u16),
             Scalar::I32 => int!(i32),
             Scalar::U32 => int!(u32),
+            // ASCII keeps what an f32 would round (a `float` column written
+            // with more digits reads back as written, as rply reads it)
+            Scalar::F32 if self.encoding == PlyEncoding::Ascii && v as f32 as f64 != v => {
+                float!(f64)
+            }
             Scalar::F32 => float!(f32),
             Scalar::F64 => float!(f64),
         }
