@@ -253,7 +253,7 @@ fn the_kernel_path_is_forced_by_normalnet_isa_and_reported() {
         .unwrap();
     assert_eq!(o.status.code(), Some(1));
     assert!(
-        stderr(&o).contains("NORMALNET_ISA=\"neon\" is no kernel path (expected one of scalar, avx2, avx512, avx512vnni)"),
+        stderr(&o).contains("NORMALNET_ISA=\"neon\" is no kernel path (expected one of scalar, avx2, avxvnni, avx512, avx512vnni)"),
         "{}",
         stderr(&o)
     );

@@ -95,10 +95,10 @@ impl Int8Conv {
 
     /// As [`FoldedConv::run`] on an input quantized by [`quantize`] with
     /// [`Self::input_pad`] (`input` bytes, f32 value = byte · `input_scale`),
-    /// with the kernels of `isa`: AVX-512 VNNI (`vpdpbusd`), or AVX2
-    /// (`vpmaddwd` on bytes widened to i16). Both sum the same products
-    /// exactly in i32 and finish them with the same f32 steps: the same
-    /// bits.
+    /// with the kernels of `isa`: AVX-512 VNNI (`vpdpbusd`), AVX-VNNI
+    /// (`vpdpbusd` on 256 bits) or AVX2 (`vpmaddwd` on bytes widened to
+    /// i16). All sum the same products exactly in i32 and finish them with
+    /// the same f32 steps: the same bits.
     ///
     /// # Safety
     /// [`supported`]`(isa)`, and the CPU runs `isa`.
@@ -119,9 +119,19 @@ impl Int8Conv {
         if !isa.has_vnni() {
             debug_assert!(isa.has_avx2());
             let flags = [accumulate, relu];
+            let avx_vnni = isa.uses_avx_vnni();
             // SAFETY: the caller checked the features.
             return unsafe {
-                crate::conv_int8_avx2::run(self, input, input_scale, n, out, flags, region)
+                crate::conv_int8_avx2::run(
+                    self,
+                    input,
+                    input_scale,
+                    n,
+                    out,
+                    flags,
+                    region,
+                    avx_vnni,
+                )
             };
         }
         // V vectors of 16 output channels; tiles of 1 ..= 16 / V cubes
@@ -213,6 +223,13 @@ impl Int8Conv {
             self.cout,
             self.layout_pad,
         ]
+    }
+
+    /// The signed-byte weights of taps `taps` in the VNNI layout,
+    /// `[cin/4][cout][4]` per tap.
+    pub(crate) fn tap_weights8(&self, taps: std::ops::Range<usize>) -> &[i8] {
+        let per_tap = self.cin * self.cout;
+        &self.w[taps.start * per_tap..taps.end * per_tap]
     }
 
     /// The i16 pair weights of tap `tap`, `[cin/2][cout][2]`.

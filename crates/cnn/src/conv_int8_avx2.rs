@@ -1,12 +1,18 @@
-//! The int8 convolutions of [`Int8Conv`] on AVX2 (no AVX-512): the input
-//! bytes widened to i16, the signed-byte weights held as i16 pairs, and
-//! `vpmaddwd` summing two products per i32 lane. Every product of a byte
-//! (0 ..= 255) and a weight (−127 ..= 127) and every pair sum (≤ 64,770 in
-//! magnitude) is exact in i32, as are the sums over taps, so the sums equal
-//! VNNI's `vpdpbusd` sums bit for bit, and the f32 steps after them (one
-//! fused multiply-add by input scale × weight scale plus bias, the residual
-//! sum, the ReLU) are the same operations in the same order: the outputs
-//! are those of the AVX-512 VNNI kernel.
+//! The int8 convolutions of [`Int8Conv`] on AVX2 (no AVX-512), in two
+//! forms that give the same sums:
+//!
+//! - plain AVX2: the input bytes widened to i16, the signed-byte weights held
+//!   as i16 pairs, and `vpmaddwd` summing two products per i32 lane. Every
+//!   product of a byte (0 ..= 255) and a weight (−127 ..= 127) and every pair
+//!   sum (≤ 64,770 in magnitude) is exact in i32, as are the sums over taps;
+//! - AVX-VNNI (`Isa::AvxVnni`): the bytes and the VNNI weight layout as they
+//!   are, `vpdpbusd` on 256-bit vectors summing four products per i32 lane
+//!   (exact likewise): a quarter of the instructions per product.
+//!
+//! So the sums equal AVX-512 VNNI's `vpdpbusd` sums bit for bit, and the f32
+//! steps after them (one fused multiply-add by input scale × weight scale
+//! plus bias, the residual sum, the ReLU) are the same operations in the
+//! same order: the outputs are those of the AVX-512 VNNI kernel.
 //!
 //! The narrower scheme `vpmaddubsw` (u8 × s8 pairs summed in i16) would
 //! double the products per instruction but saturates: 255·127 + 255·127 =
@@ -33,29 +39,39 @@ thread_local! {
     static WIDE: RefCell<Vec<i16>> = const { RefCell::new(Vec::new()) };
 }
 
-/// The i32 sums of `T` output cubes, one channel block.
-type TileFn = unsafe fn(&Int8Conv, &[i16], usize, [usize; 4], &mut [[__m256i; V]; MAX_TILE]);
+/// The i32 sums of `T` output cubes, one channel block, from the input as
+/// `E` (i16 widened bytes, or the bytes).
+type TileFn<E> = unsafe fn(&Int8Conv, &[E], usize, [usize; 4], &mut [[__m256i; V]; MAX_TILE]);
 
-/// [`Int8Conv::run`] on AVX2.
+/// [`Int8Conv::run`] on AVX2, with `vpdpbusd` where `avx_vnni`.
 ///
 /// # Safety
-/// The CPU has AVX2 and FMA.
+/// The CPU has AVX2 and FMA, and AVX-VNNI where `avx_vnni`.
 #[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
 pub(crate) unsafe fn run(
     c: &Int8Conv,
     input: &[u8],
     input_scale: f32,
     n: usize,
     out: &mut [f32],
-    [accumulate, relu]: [bool; 2],
+    flags: [bool; 2],
     region: Option<Region>,
+    avx_vnni: bool,
 ) {
-    let [k, s, p, _, co, _] = c.shape();
-    assert!(co.is_multiple_of(BLOCK), "{co} output channels");
-    let m = output_side(n, k, s, p);
-    assert_eq!(out.len(), m * m * m * co);
-    let (factor, bias) = c.finish_factors(input_scale);
-    let tiles: [TileFn; MAX_TILE] = [
+    if avx_vnni {
+        let tiles: [TileFn<u8>; MAX_TILE] = [
+            tile_sums_vnni::<1>,
+            tile_sums_vnni::<2>,
+            tile_sums_vnni::<3>,
+            tile_sums_vnni::<4>,
+            tile_sums_vnni::<5>,
+            tile_sums_vnni::<6>,
+        ];
+        // SAFETY: the caller checked the features.
+        return unsafe { run_tiles(c, input, input_scale, n, out, flags, region, &tiles) };
+    }
+    let tiles: [TileFn<i16>; MAX_TILE] = [
         tile_sums::<1>,
         tile_sums::<2>,
         tile_sums::<3>,
@@ -63,6 +79,45 @@ pub(crate) unsafe fn run(
         tile_sums::<5>,
         tile_sums::<6>,
     ];
+    WIDE.with_borrow_mut(|wide| {
+        widen(input, wide);
+        // SAFETY: the caller checked the features.
+        unsafe {
+            run_tiles(
+                c,
+                &wide[..input.len()],
+                input_scale,
+                n,
+                out,
+                flags,
+                region,
+                &tiles,
+            );
+        }
+    });
+}
+
+/// The convolution from the input as `E`, tile by tile with `tiles`.
+///
+/// # Safety
+/// The CPU runs `tiles` (and has AVX2 and FMA).
+#[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn run_tiles<E>(
+    c: &Int8Conv,
+    input: &[E],
+    input_scale: f32,
+    n: usize,
+    out: &mut [f32],
+    [accumulate, relu]: [bool; 2],
+    region: Option<Region>,
+    tiles: &[TileFn<E>; MAX_TILE],
+) {
+    let [k, s, p, _, co, _] = c.shape();
+    assert!(co.is_multiple_of(BLOCK), "{co} output channels");
+    let m = output_side(n, k, s, p);
+    assert_eq!(out.len(), m * m * m * co);
+    let (factor, bias) = c.finish_factors(input_scale);
     // i32 sums of one output cube's block → f32 scale, bias, [residual], [ReLU]
     let finish = |sums: &[__m256i; V], cb: usize, dst: &mut [f32]| {
         for (v, &sum) in sums.iter().enumerate() {
@@ -86,22 +141,18 @@ pub(crate) unsafe fn run(
             unsafe { _mm256_storeu_ps(d.as_mut_ptr(), y) };
         }
     };
-    WIDE.with_borrow_mut(|wide| {
-        widen(input, wide);
-        let wide = &wide[..input.len()];
-        let mut sums = [[_mm256_setzero_si256(); V]; MAX_TILE];
-        for_each_tile(m, co, region, MAX_TILE, out, |[od, oh, ow], t, out| {
-            let first = (od * m + oh) * m + ow;
-            for cb in (0..co).step_by(BLOCK) {
-                // SAFETY: the caller checked the features; `tile_sums`
-                // checks its slices.
-                unsafe { tiles[t - 1](c, wide, n, [od, oh, ow, cb], &mut sums) };
-                for (i, sum) in sums[..t].iter().enumerate() {
-                    let o = first + i;
-                    finish(sum, cb, &mut out[o * co..o * co + co]);
-                }
+    let mut sums = [[_mm256_setzero_si256(); V]; MAX_TILE];
+    for_each_tile(m, co, region, MAX_TILE, out, |[od, oh, ow], t, out| {
+        let first = (od * m + oh) * m + ow;
+        for cb in (0..co).step_by(BLOCK) {
+            // SAFETY: the caller checked the features; the tile functions
+            // check their slices.
+            unsafe { tiles[t - 1](c, input, n, [od, oh, ow, cb], &mut sums) };
+            for (i, sum) in sums[..t].iter().enumerate() {
+                let o = first + i;
+                finish(sum, cb, &mut out[o * co..o * co + co]);
             }
-        });
+        }
     });
 }
 
@@ -172,6 +223,61 @@ unsafe fn tile_sums<const T: usize>(
                             );
                             for (a, &w) in a.iter_mut().zip(&wv) {
                                 *a = _mm256_add_epi32(*a, _mm256_madd_epi16(xv, w));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    sums[..T].copy_from_slice(&acc);
+}
+
+/// As [`tile_sums`], from the bytes themselves: for every tap and group of
+/// four input channels, two weight loads (the VNNI layout: four bytes per
+/// output channel) feed `2·T` `vpdpbusd` (one input group broadcast per
+/// cube).
+///
+/// # Safety
+/// The CPU has AVX2 and AVX-VNNI.
+#[target_feature(enable = "avx2,avxvnni")]
+unsafe fn tile_sums_vnni<const T: usize>(
+    c: &Int8Conv,
+    input: &[u8],
+    n: usize,
+    [od, oh, ow, cb]: [usize; 4],
+    sums: &mut [[__m256i; V]; MAX_TILE],
+) {
+    let [k, s, p, cin, co, layout_pad] = c.shape();
+    let groups = cin / 4;
+    let padded = (n + 2 * layout_pad) * cin;
+    assert!(cb + BLOCK <= co);
+    let mut acc = [[_mm256_setzero_si256(); V]; T];
+    for kd in taps(od, s, p, k, n) {
+        let id = od * s + kd - p;
+        for kh in taps(oh, s, p, k, n) {
+            let ih = oh * s + kh - p;
+            // position in the padded W row of output cube ow's tap kw
+            let start = (id * n + ih) * padded + (ow * s + layout_pad - p) * cin;
+            let x = &input[start..start + ((T - 1) * s + k) * cin];
+            let first = (kd * k + kh) * k;
+            let wt = c.tap_weights8(first..first + k);
+            // SAFETY (all reads): kw < k, g < groups, t < T, v < V: input
+            // bytes (t·s + kw)·cin + 4g + 4 ≤ ((T − 1)·s + k)·cin, weight
+            // bytes ((kw·groups + g)·co + cb + 8v)·4 + 32 ≤ k·cin·co.
+            unsafe {
+                for kw in 0..k {
+                    for g in 0..groups {
+                        let wg = wt.as_ptr().add(((kw * groups + g) * co + cb) * 4);
+                        let wv: [__m256i; V] =
+                            std::array::from_fn(|v| _mm256_loadu_si256(wg.add(32 * v).cast()));
+                        let xg = x.as_ptr().add(kw * cin + 4 * g);
+                        for (t, a) in acc.iter_mut().enumerate() {
+                            let xv = _mm256_set1_epi32(
+                                xg.add(t * s * cin).cast::<i32>().read_unaligned(),
+                            );
+                            for (a, &w) in a.iter_mut().zip(&wv) {
+                                *a = _mm256_dpbusd_avx_epi32(*a, xv, w);
                             }
                         }
                     }

@@ -1,6 +1,6 @@
 //! The instruction set every SIMD kernel of the project runs, decided once
 //! per process: the best one the CPU has, or the one the environment
-//! variable [`ENV`] (`NORMALNET_ISA=avx512vnni|avx512|avx2|scalar`) asks
+//! variable [`ENV`] (`NORMALNET_ISA=avx512vnni|avx512|avxvnni|avx2|scalar`) asks
 //! for. Every kernel that dispatches at run time asks [`active`], so one
 //! variable forces one path through the whole program (voxelizer, f32 and
 //! int8 convolutions, the head, training), and a machine with AVX-512 runs
@@ -19,13 +19,19 @@ use std::sync::OnceLock;
 pub const ENV: &str = "NORMALNET_ISA";
 
 /// A kernel path, from the most portable to the fastest. Each includes the
-/// ones before it (a CPU that runs `Avx512Vnni` runs all four).
+/// ones before it, except [`Isa::AvxVnni`]: the AVX-512 paths need not have
+/// it (Skylake-X, Ice Lake and Zen 4 have AVX-512 but not AVX-VNNI), and
+/// [`Isa::runs_here`] asks the CPU for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Isa {
     /// Plain Rust, no target features: compiles and runs on any target.
     Scalar,
     /// x86-64 AVX2 with FMA.
     Avx2,
+    /// [`Isa::Avx2`] with AVX-VNNI (`vpdpbusd` on 256-bit vectors, the
+    /// Intel client CPUs since Alder Lake, which have no AVX-512): the int8
+    /// convolutions of the residual blocks; everything else as `Avx2`.
+    AvxVnni,
     /// x86-64 AVX-512 F, BW and VL (with AVX2 and FMA).
     Avx512,
     /// [`Isa::Avx512`] with VNNI (`vpdpbusd`): the int8 convolutions.
@@ -34,13 +40,20 @@ pub enum Isa {
 
 impl Isa {
     /// Every path, most portable first.
-    pub const ALL: [Isa; 4] = [Isa::Scalar, Isa::Avx2, Isa::Avx512, Isa::Avx512Vnni];
+    pub const ALL: [Isa; 5] = [
+        Isa::Scalar,
+        Isa::Avx2,
+        Isa::AvxVnni,
+        Isa::Avx512,
+        Isa::Avx512Vnni,
+    ];
 
     /// The name [`ENV`] takes and reports print.
     pub fn name(self) -> &'static str {
         match self {
             Isa::Scalar => "scalar",
             Isa::Avx2 => "avx2",
+            Isa::AvxVnni => "avxvnni",
             Isa::Avx512 => "avx512",
             Isa::Avx512Vnni => "avx512vnni",
         }
@@ -61,7 +74,10 @@ impl Isa {
 
     /// Whether this CPU runs the path.
     pub fn runs_here(self) -> bool {
-        self <= Isa::detected()
+        match self {
+            Isa::AvxVnni => has_avx_vnni(),
+            _ => self <= Isa::detected(),
+        }
     }
 
     /// Every path this CPU runs, most portable first.
@@ -83,6 +99,12 @@ impl Isa {
     pub fn has_vnni(self) -> bool {
         self >= Isa::Avx512Vnni
     }
+
+    /// The 256-bit VNNI kernels run (only on this path: the AVX-512 paths
+    /// have their own).
+    pub fn uses_avx_vnni(self) -> bool {
+        self == Isa::AvxVnni
+    }
 }
 
 impl fmt::Display for Isa {
@@ -99,6 +121,7 @@ fn detect() -> Isa {
     match (avx2, avx512, avx512 && has!("avx512vnni")) {
         (_, _, true) => Isa::Avx512Vnni,
         (_, true, _) => Isa::Avx512,
+        (true, ..) if has_avx_vnni() => Isa::AvxVnni,
         (true, ..) => Isa::Avx2,
         _ => Isa::Scalar,
     }
@@ -107,6 +130,18 @@ fn detect() -> Isa {
 #[cfg(not(target_arch = "x86_64"))]
 fn detect() -> Isa {
     Isa::Scalar
+}
+
+/// The CPU has AVX2, FMA and AVX-VNNI.
+#[cfg(target_arch = "x86_64")]
+fn has_avx_vnni() -> bool {
+    use std::arch::is_x86_feature_detected as has;
+    has!("avx2") && has!("fma") && has!("avxvnni")
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn has_avx_vnni() -> bool {
+    false
 }
 
 /// Why [`ENV`] cannot be followed.
@@ -188,6 +223,8 @@ mod tests {
         assert!(Isa::Scalar < Isa::Avx2 && Isa::Avx512 < Isa::Avx512Vnni);
         assert!(Isa::Avx512Vnni.has_avx512() && !Isa::Avx2.has_avx512());
         assert!(Isa::Avx2.has_avx2() && !Isa::Scalar.has_avx2());
+        assert!(Isa::AvxVnni.has_avx2() && !Isa::AvxVnni.has_avx512());
+        assert!(Isa::AvxVnni.uses_avx_vnni() && !Isa::Avx512Vnni.uses_avx_vnni());
     }
 
     #[test]
@@ -197,7 +234,10 @@ mod tests {
         assert_eq!(choose(Some("scalar")), Ok(Isa::Scalar));
         let err = choose(Some("neon")).unwrap_err();
         assert_eq!(err, IsaError::Unknown("neon".into()));
-        assert!(err.to_string().contains("scalar, avx2, avx512, avx512vnni"));
+        assert!(
+            err.to_string()
+                .contains("scalar, avx2, avxvnni, avx512, avx512vnni")
+        );
         for isa in Isa::ALL {
             match choose(Some(isa.name())) {
                 Ok(got) => assert!(got == isa && isa.runs_here()),
