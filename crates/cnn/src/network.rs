@@ -764,9 +764,12 @@ impl Cnn {
                                 stem_rows::run_int8(q, p, &s.rows, scale, g, stem_out, true, near)
                             },
                             false => unsafe {
-                                s.rows.widen();
+                                let avx_vnni = self.isa.uses_avx_vnni();
+                                if !avx_vnni {
+                                    s.rows.widen();
+                                }
                                 stem_rows::avx2::run_int8(
-                                    q, p, &s.rows, scale, g, stem_out, true, near,
+                                    q, p, &s.rows, scale, g, stem_out, true, near, avx_vnni,
                                 )
                             },
                         });

@@ -16,7 +16,9 @@
 //! − offset to f32, one fused multiply-add by scale and bias, the floor)
 //! are the same operations: the outputs of [`super::run_int8`], bit for
 //! bit. Per cube and row: 8 input pairs × 2 vectors = 16 `vpmaddwd` (VNNI:
-//! 4 `vpdpbusd`), in tiles of up to 6 cubes (12 i32 chains).
+//! 4 `vpdpbusd`), in tiles of up to 6 cubes (12 i32 chains). With AVX-VNNI
+//! (`Isa::AvxVnni`) the same tiles read the bytes and the VNNI weights:
+//! 4 groups × 2 vectors = 8 256-bit `vpdpbusd` per cube and row.
 
 use super::{
     CHUNK, CIN, CO, CubeMask, FoldedConv, Int8Stem, K, Rows, SLACK, WINDOW, background,
@@ -117,12 +119,13 @@ pub(crate) unsafe fn run(
 }
 
 /// [`super::run_int8`] on AVX2, on rows quantized by [`Rows::quantize`]
-/// with scale `input_scale` and widened by [`Rows::widen`]. Returns the
-/// largest value of `out`.
+/// with scale `input_scale` and widened by [`Rows::widen`]; with
+/// `avx_vnni`, on the bytes themselves with 256-bit `vpdpbusd` (not
+/// widened: the same sums). Returns the largest value of `out`.
 ///
 /// # Safety
-/// The CPU must have AVX2 and FMA, and `serves(c, n)` must hold for the
-/// stem `q` was made from.
+/// The CPU must have AVX2 and FMA (and AVX-VNNI with `avx_vnni`), and
+/// `serves(c, n)` must hold for the stem `q` was made from.
 #[target_feature(enable = "avx2,fma")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) unsafe fn run_int8(
@@ -134,11 +137,12 @@ pub(crate) unsafe fn run_int8(
     out: &mut [f32],
     relu: bool,
     near: Option<&mut CubeMask>,
+    avx_vnni: bool,
 ) -> f32 {
     let m = crate::conv::output_side(n, K, 1, p);
     assert!(rows.len >= m + K - 1);
     assert!(
-        rows.wide.len() == rows.row_bytes() + SLACK,
+        avx_vnni || rows.wide.len() == rows.row_bytes() + SLACK,
         "rows not quantized and widened"
     );
     let finish = Finish {
@@ -168,7 +172,11 @@ pub(crate) unsafe fn run_int8(
                         // above: rows of `len ≥ m + K − 1` cubes, SLACK
                         // values after the last).
                         $($t => unsafe {
-                            stem_tile::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
+                            if avx_vnni {
+                                stem_tile_vnni::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
+                            } else {
+                                stem_tile::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
+                            }
                         },)*
                         _ => unreachable!("tiles of 1 to MAX_TILE cubes"),
                     }
@@ -252,6 +260,73 @@ unsafe fn stem_tile<const T: usize>(
             }
         }
     }
+    finish_tile(acc, offset, finish, out, largest);
+}
+
+/// As [`stem_tile`], on the rows' bytes with AVX-VNNI: per row and group of
+/// four window bytes, the two weight vectors of its (kd, kh) in the VNNI
+/// layout and for each cube the group broadcast as one i32 — `2·T`
+/// `vpdpbusd`, a quarter of [`stem_tile`]'s multiply-adds.
+///
+/// # Safety
+/// The CPU has AVX2, FMA and AVX-VNNI; `rows` is quantized, and `c0 + T +
+/// K − 1 ≤ rows.len`.
+#[target_feature(enable = "avx2,fma,avxvnni")]
+unsafe fn stem_tile_vnni<const T: usize>(
+    q: &Int8Stem,
+    rows: &Rows,
+    c0: usize,
+    reach: &[(usize, usize, u64)],
+    finish: &Finish,
+    out: &mut [f32],
+    largest: &mut [__m256; 2],
+) {
+    const { assert!(T <= MAX_TILE) };
+    debug_assert!(c0 + T + K - 1 <= rows.len && out.len() == T * CO);
+    let tile = ((1u64 << T) - 1) << c0;
+    let mut acc = [[_mm256_setzero_si256(); 2]; T];
+    let mut offset = [_mm256_setzero_si256(); 2];
+    // rows with no occupied cube near this tile add only zeros
+    for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & tile != 0) {
+        // SAFETY: `(tap_row + 1)·WINDOW·CO ≤ q.w.len()` and `(tap_row +
+        // 1)·CO ≤ q.offset.len()` (one (kd, kh)); cube c0 + o's window
+        // reads bytes 3·(x0 + c0 + o) .. + 16 ≤ 3·(x0 + len) + SLACK, inside
+        // `rows.bytes` (`c0 + T + K − 1 ≤ len`).
+        unsafe {
+            let w = q.w.as_ptr().add(tap_row * WINDOW * CO);
+            for (h, o) in offset.iter_mut().enumerate() {
+                let row_offset = q.offset.as_ptr().add(tap_row * CO + 8 * h);
+                *o = _mm256_add_epi32(*o, _mm256_loadu_si256(row_offset.cast()));
+            }
+            let x = rows.bytes.as_ptr().add(CIN * (x0 + c0));
+            for g in 0..WINDOW / 4 {
+                let wg = w.add(g * CO * 4);
+                let wv = [
+                    _mm256_loadu_si256(wg.cast()),
+                    _mm256_loadu_si256(wg.add(32).cast()),
+                ];
+                for (t, a) in acc.iter_mut().enumerate() {
+                    let group = x.add(CIN * t + 4 * g).cast::<i32>().read_unaligned();
+                    let xv = _mm256_set1_epi32(group);
+                    a[0] = _mm256_dpbusd_avx_epi32(a[0], xv, wv[0]);
+                    a[1] = _mm256_dpbusd_avx_epi32(a[1], xv, wv[1]);
+                }
+            }
+        }
+    }
+    finish_tile(acc, offset, finish, out, largest);
+}
+
+/// The i32 sums of a tile's cubes, less the rows' offsets, to the outputs
+/// ([`Finish`]) and their maximum into `largest`.
+#[target_feature(enable = "avx2,fma")]
+fn finish_tile<const T: usize>(
+    acc: [[__m256i; 2]; T],
+    offset: [__m256i; 2],
+    finish: &Finish,
+    out: &mut [f32],
+    largest: &mut [__m256; 2],
+) {
     let mut top = *largest;
     for (a, cube) in acc.into_iter().zip(out.chunks_exact_mut(CO)) {
         for h in 0..2 {

@@ -847,7 +847,17 @@ mod tests {
                 let mut near = CubeMask::from_flags(&[true; 8], 2);
                 // SAFETY: AVX2 and FMA detected above; `serves` holds.
                 let largest = unsafe {
-                    avx2::run_int8(&q, c.pad, &rows, s, n, &mut got, relu, Some(&mut near))
+                    avx2::run_int8(
+                        &q,
+                        c.pad,
+                        &rows,
+                        s,
+                        n,
+                        &mut got,
+                        relu,
+                        Some(&mut near),
+                        false,
+                    )
                 };
                 assert_eq!(near, want_near, "n {n}: near cubes");
                 for (g, w) in got.iter().zip(&want) {
@@ -857,6 +867,19 @@ mod tests {
                     largest,
                     got.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b))
                 );
+                if normalnet_isa::Isa::AvxVnni.runs_here() {
+                    let mut ymm = vec![f32::NAN; m * m * m * 16];
+                    // SAFETY: AVX-VNNI (with AVX2 and FMA) detected.
+                    let top = unsafe {
+                        avx2::run_int8(&q, c.pad, &rows, s, n, &mut ymm, relu, None, true)
+                    };
+                    assert!(
+                        got.iter()
+                            .zip(&ymm)
+                            .all(|(g, v)| g.to_bits() == v.to_bits())
+                    );
+                    assert_eq!(top, largest);
+                }
                 if isa.has_vnni() {
                     let mut vnni = vec![f32::NAN; m * m * m * 16];
                     // SAFETY: VNNI (with F and BW) detected.
