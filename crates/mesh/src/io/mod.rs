@@ -519,10 +519,17 @@ pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
         b'\n'
     };
     let bytes = bytes.strip_suffix(&[sep]).unwrap_or(bytes);
-    bytes.split(move |&b| b == sep).enumerate().map(|(i, l)| {
-        let end = l.iter().rposition(|&b| b != b'\r').map_or(0, |k| k + 1);
-        (i + 1, &l[..end])
-    })
+    bytes
+        .split(move |&b| b == sep)
+        .enumerate()
+        .map(|(i, l)| (i + 1, without_trailing_cr(l)))
+}
+
+/// `line` without every `\r` at its end (`\r\r\n` ends leave none).
+#[inline]
+pub(crate) fn without_trailing_cr(line: &[u8]) -> &[u8] {
+    let end = line.iter().rposition(|&b| b != b'\r').map_or(0, |k| k + 1);
+    &line[..end]
 }
 
 #[cfg(test)]

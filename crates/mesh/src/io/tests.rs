@@ -790,6 +790,25 @@ fn lines_drop_every_carriage_return_at_their_end() {
     assert_eq!(got, [&b"# a"[..], b"v 0 0 0", b"# b\r "]);
 }
 
+/// Found by fuzzing (fuzz/regressions/ply/read_ply_file-header-comment-crs.ply):
+/// a PLY header comment ending in `\r\r\n` lost one `\r` per write → read
+/// round, as OBJ lines did; every `\r` before a header line's end goes.
+#[test]
+fn ply_header_lines_drop_every_carriage_return_at_their_end() {
+    use crate::io::{FileWriteOptions, encode_mesh_file, parse_mesh_file};
+    let path = Path::new("t.ply");
+    let text = "ply\r\nformat ascii 1.0\r\ncomment a\r\r\r\nelement vertex 3\r\n\
+                property float x\r\nproperty float y\r\nproperty float z\r\n\
+                element face 1\r\nproperty list uchar int vertex_indices\r\r\n\
+                end_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n";
+    let file = parse_mesh_file(text.as_bytes(), Format::Ply, path).unwrap();
+    let written =
+        encode_mesh_file(&file.mesh, &file.attributes, &FileWriteOptions::default()).unwrap();
+    let written = String::from_utf8(written).unwrap();
+    assert!(written.contains("\ncomment a\n"), "{written}");
+    assert!(!written.contains('\r'), "{written}");
+}
+
 /// Found by fuzzing (fuzz/regressions/ply/read_ply_file-ascii-float-beyond-f32.ply):
 /// an ASCII value out of its property's type (1.5e119 in a `float`, 300 in
 /// a `uchar`) is refused, not written back as infinity or wrapped; a

@@ -172,7 +172,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
             return Err(perr(path, ln + 1, "header ends without end_header"));
         };
         let line = &bytes[pos..pos + nl];
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        let line = crate::io::without_trailing_cr(line);
         pos += nl + 1;
         ln += 1;
         let mut tok = crate::io::tokens(line);
