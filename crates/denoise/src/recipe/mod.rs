@@ -37,6 +37,22 @@
 //! suite = "../validation.toml"
 //! ```
 //!
+//! A stage may take what it makes from a bundle folder instead (a recipe
+//! that refits only the switch of a shipped bundle,
+//! `configs/recipes/lite-heavy-switch.toml`):
+//!
+//! ```toml
+//! [[stage]]
+//! kind = "networks"
+//! name = "shipped"
+//! bundle = "../../models/lite"   # its networks as they are, no training
+//!
+//! [[stage]]
+//! kind = "switch_fit"
+//! name = "shipped-switch"
+//! bundle = "../../models/lite"   # its main table (late = true: its late one)
+//! ```
+//!
 //! A CNR recipe has one stage instead, which trains the model on a
 //! training config's sources (`configs/recipes/cnr.toml`):
 //!
@@ -131,12 +147,19 @@ pub struct CnrStage {
 pub struct NetworksStage {
     /// the stage's name (its folder `NN-name`)
     pub name: String,
-    /// the training config (TOML, relative to the recipe's folder)
+    /// the training config (TOML, relative to the recipe's folder); empty
+    /// with `bundle`
+    #[serde(default)]
     pub config: String,
     /// an earlier `networks` stage whose bundle this one continues (the
     /// config's `init_from` is replaced by it); empty = the config's own
     #[serde(default)]
     pub continue_from: String,
+    /// a bundle folder (relative to the recipe's folder) whose networks the
+    /// stage takes as they are instead of training any (no `config`): a
+    /// recipe that refits only the switch of a shipped bundle
+    #[serde(default)]
+    pub bundle: String,
 }
 
 /// Stage `switch_rows`.
@@ -189,8 +212,14 @@ pub struct FitStage {
     /// the stage's name
     pub name: String,
     /// `switch_rows` stages whose rows it reads (a name given twice counts
-    /// its rows twice)
+    /// its rows twice); empty with `bundle`
+    #[serde(default)]
     pub rows: Vec<String>,
+    /// a bundle folder (relative to the recipe's folder) whose table (with
+    /// `late`, its late table) the stage takes instead of fitting one (no
+    /// `rows`): the path a refit's rows follow, or a table it keeps
+    #[serde(default)]
+    pub bundle: String,
     /// hidden units
     #[serde(default = "default_hidden")]
     pub hidden: usize,
@@ -372,6 +401,16 @@ impl Recipe {
         let mut files = vec![self.file.clone()];
         for stage in &self.stages {
             match stage {
+                Stage::Networks(s) if !s.bundle.is_empty() => {
+                    let bundle = self.path(&s.bundle);
+                    files.push(bundle.join(normalnet_net::bundle::MANIFEST));
+                    files.extend(
+                        (0..6).map(|i| bundle.join(normalnet_net::bundle::network_file(i))),
+                    );
+                }
+                Stage::SwitchFit(s) if !s.bundle.is_empty() => {
+                    files.push(self.path(&s.bundle).join(normalnet_net::bundle::MANIFEST));
+                }
                 Stage::Networks(s) => files.push(self.path(&s.config)),
                 Stage::Cnr(s) => files.push(self.path(&s.config)),
                 Stage::Evaluate(s) => files.push(self.path(&s.suite)),
@@ -469,6 +508,7 @@ impl Recipe {
         }
         for stage in &self.stages {
             let sources = match stage {
+                Stage::Networks(s) if !s.bundle.is_empty() => continue,
                 Stage::Networks(s) => self.train_config(s)?.sources,
                 Stage::Cnr(s) => self.cnr_config(s)?.sources,
                 Stage::SwitchRows(s) => s.pairs.clone(),
@@ -489,9 +529,39 @@ impl Recipe {
         Ok(())
     }
 
+    /// The manifest of the bundle folder `bundle` (relative) that stage `i`
+    /// takes its networks or table from.
+    ///
+    /// # Errors
+    /// A folder without a readable manifest, naming the stage.
+    pub(super) fn bundle_manifest(
+        &self,
+        i: usize,
+        bundle: &str,
+    ) -> Result<normalnet_net::bundle::Manifest, DenoiseError> {
+        let file = self.path(bundle).join(normalnet_net::bundle::MANIFEST);
+        normalnet_net::bundle::Manifest::read(&file)
+            .map_err(|e| self.stage_error(self.stages[i].name(), format!("bundle: {e}")))
+    }
+
+    /// Whether a `switch_fit` stage before stage `i` makes a main table.
+    fn main_table_before(&self, i: usize) -> bool {
+        self.stages[..i]
+            .iter()
+            .any(|t| matches!(t, Stage::SwitchFit(f) if !f.late))
+    }
+
     fn check_stage(&self, i: usize) -> Result<(), DenoiseError> {
         let bad = |message: String| self.stage_error(self.stages[i].name(), message);
         match &self.stages[i] {
+            Stage::Networks(s) if !s.bundle.is_empty() => {
+                if !s.config.is_empty() || !s.continue_from.is_empty() {
+                    return Err(bad(
+                        "a stage takes its networks from `bundle` or trains them by `config`, not both".into(),
+                    ));
+                }
+                self.bundle_manifest(i, &s.bundle)?;
+            }
             Stage::Networks(s) => {
                 let config = self.train_config(s)?;
                 if config.stop_after < 6 {
@@ -533,6 +603,32 @@ impl Recipe {
                     .validate(&self.file)
                     .map_err(|e| bad(e.to_string()))?;
             }
+            Stage::SwitchFit(s) if !s.bundle.is_empty() => {
+                if !s.rows.is_empty() {
+                    return Err(bad(
+                        "a stage takes its table from `bundle` or fits it on `rows`, not both"
+                            .into(),
+                    ));
+                }
+                let switch = self.bundle_manifest(i, &s.bundle)?.switch;
+                let table = match (switch, s.late) {
+                    (Some(main), false) => Some(main),
+                    (Some(main), true) => main.late.map(|late| *late),
+                    (None, _) => None,
+                };
+                if table.is_none() {
+                    return Err(bad(format!(
+                        "bundle {:?} has no {} switch table",
+                        s.bundle,
+                        if s.late { "late" } else { "main" }
+                    )));
+                }
+                if s.late && !self.main_table_before(i) {
+                    return Err(bad(
+                        "a late table needs an earlier main switch_fit stage".into()
+                    ));
+                }
+            }
             Stage::SwitchFit(s) => {
                 if s.rows.is_empty() {
                     return Err(bad("no rows stages".into()));
@@ -556,11 +652,7 @@ impl Recipe {
                         "a late table is fitted on the iterations after the main table's clamp: set min_iteration".into(),
                     ));
                 }
-                if s.late
-                    && !self.stages[..i]
-                        .iter()
-                        .any(|t| matches!(t, Stage::SwitchFit(f) if !f.late))
-                {
+                if s.late && !self.main_table_before(i) {
                     return Err(bad(
                         "a late table needs an earlier main switch_fit stage".into()
                     ));

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use normalnet_mesh::Progress;
 use normalnet_net::Bundle;
+use normalnet_net::bundle::{MANIFEST, network_file};
 use normalnet_net::switch::SwitchWeights;
 use normalnet_net::switch_fit::{FitParams, ROW_LEN, fit};
 use normalnet_net::switch_rows::{TracePath, TraceSettings, read_rows, trace, write_rows};
@@ -37,6 +38,9 @@ pub(super) fn networks(
     dir: &Path,
     progress: &dyn Progress,
 ) -> Result<(), DenoiseError> {
+    if !stage.bundle.is_empty() {
+        return copy_networks(recipe, stage, dir);
+    }
     let mut config = recipe.train_config(stage)?;
     if !stage.continue_from.is_empty() {
         let from = recipe
@@ -47,6 +51,22 @@ pub(super) fn networks(
     let resume = dir.join("state.toml").is_file();
     train(&config, dir, resume, progress)
         .map_err(|e| recipe_error(dir, format!("stage {:?}: {e}", stage.name)))?;
+    Ok(())
+}
+
+/// `networks` with `bundle`: that bundle's manifest and networks, copied
+/// into `dir` as they are.
+fn copy_networks(recipe: &Recipe, stage: &NetworksStage, dir: &Path) -> Result<(), DenoiseError> {
+    let i = recipe.index_of(&stage.name).expect("a stage of the recipe");
+    let manifest = recipe.bundle_manifest(i, &stage.bundle)?;
+    let from = recipe.path(&stage.bundle);
+    for k in 0..manifest.networks.len() {
+        let name = network_file(k);
+        let bytes = std::fs::read(from.join(&name))
+            .map_err(|e| recipe_error(&from.join(&name), format!("reading: {e}")))?;
+        write_file(&dir.join(&name), &bytes)?;
+    }
+    manifest.write(&dir.join(MANIFEST))?;
     Ok(())
 }
 
@@ -192,7 +212,8 @@ struct SwitchFile {
     switch: SwitchWeights,
 }
 
-/// `switch_fit`: the table, written to `DIR/switch.toml` (`[switch]`).
+/// `switch_fit`: the table fitted on the rows (or taken from `bundle`),
+/// written to `DIR/switch.toml` (`[switch]`).
 pub(super) fn switch_fit(
     recipe: &Recipe,
     stage: &FitStage,
@@ -202,6 +223,22 @@ pub(super) fn switch_fit(
 ) -> Result<(), DenoiseError> {
     let fail =
         |e: &dyn std::fmt::Display| recipe_error(dir, format!("stage {:?}: {e}", stage.name));
+    if !stage.bundle.is_empty() {
+        let i = recipe.index_of(&stage.name).expect("a stage of the recipe");
+        let main = recipe
+            .bundle_manifest(i, &stage.bundle)?
+            .switch
+            .ok_or_else(|| fail(&"the bundle has no switch"))?;
+        let mut table = match stage.late {
+            false => main,
+            true => *main
+                .late
+                .ok_or_else(|| fail(&"the bundle has no late table"))?,
+        };
+        table.late = None;
+        let text = toml::to_string(&SwitchFile { switch: table }).map_err(|e| fail(&e))?;
+        return write_file(&dir.join(SWITCH_FILE), text.as_bytes());
+    }
     let mut rows = Vec::new();
     for r in &stage.rows {
         let i = recipe.index_of(r).expect("checked");

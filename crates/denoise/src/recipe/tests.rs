@@ -122,7 +122,7 @@ fn the_shipped_recipes_load() {
         );
         return;
     }
-    for name in ["lite.toml", "smoke.toml"] {
+    for name in ["lite.toml", "lite-heavy-switch.toml", "smoke.toml"] {
         let r = Recipe::load(&recipes.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(r.stages.iter().any(|s| s.kind() == "evaluate"), "{name}");
         r.hash().unwrap();
@@ -157,4 +157,78 @@ suite = \"suite.toml\"
             && err.contains("shape:61 is a pair of the validation suite suite.toml"),
         "{err}"
     );
+}
+
+/// A recipe may take a bundle's networks and switch tables as they are
+/// (`bundle`): the bundle it assembles has the same networks and tables,
+/// and a stage that both trains and takes is refused.
+#[test]
+fn a_recipe_takes_a_bundles_networks_and_tables() {
+    let lite = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lite");
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        "name = \"t\"
+[[stage]]
+kind = \"networks\"
+name = \"shipped\"
+bundle = {lite:?}
+
+[[stage]]
+kind = \"switch_fit\"
+name = \"main\"
+bundle = {lite:?}
+
+[[stage]]
+kind = \"switch_fit\"
+name = \"late\"
+bundle = {lite:?}
+late = true
+",
+        lite = lite.display().to_string()
+    );
+    let r = recipe_in(dir.path(), &text).unwrap();
+    let out = dir.path().join("out");
+    let outcome = run(&r.file, &out, &normalnet_mesh::NoProgress).unwrap();
+    let manifest = outcome.manifest.unwrap();
+    let shipped =
+        normalnet_net::bundle::Manifest::read(&lite.join(normalnet_net::bundle::MANIFEST)).unwrap();
+    assert_eq!(manifest.switch, shipped.switch);
+    for i in 0..6 {
+        let name = normalnet_net::bundle::network_file(i);
+        assert!(
+            std::fs::read(out.join(&name)).unwrap() == std::fs::read(lite.join(&name)).unwrap()
+        );
+    }
+    // the bundle's files are part of the recipe's hash
+    assert_ne!(r.hash().unwrap(), {
+        let plain = recipe_in(dir.path(), NETWORKS).unwrap();
+        plain.hash().unwrap()
+    });
+    for (stage, expected) in [
+        (
+            format!(
+                "[[stage]]\nkind = \"networks\"\nname = \"n\"\nbundle = {:?}\nconfig = \"train.toml\"\n",
+                lite.display().to_string()
+            ),
+            "from `bundle` or trains them by `config`, not both",
+        ),
+        (
+            "[[stage]]\nkind = \"networks\"\nname = \"n\"\nbundle = \"nowhere\"\n".to_string(),
+            "bundle:",
+        ),
+        (
+            format!(
+                "{NETWORKS}[[stage]]\nkind = \"switch_fit\"\nname = \"f\"\nbundle = \"nowhere\"\n"
+            ),
+            "bundle:",
+        ),
+    ] {
+        let text = if stage.starts_with('\n') {
+            stage
+        } else {
+            format!("name = \"t\"\n{stage}")
+        };
+        let err = recipe_in(dir.path(), &text).unwrap_err().to_string();
+        assert!(err.contains(expected), "{err}");
+    }
 }
