@@ -23,7 +23,7 @@ THREADS=${1:-2}
 SCALAR_IT=${2:-2}
 SHARED=${SHARED:-../shared}
 F=$SHARED/data/gd/Fandisk0.3
-PATHS="avx512vnni avx512 avx2 scalar"
+PATHS="avx512vnni avx512 avxvnni avx2 scalar"
 if [ -z "${NORMALNET:-}" ]; then
   cargo build --release -q -p normalnet-cli
   NORMALNET=target/release/normalnet

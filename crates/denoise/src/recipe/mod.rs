@@ -551,131 +551,159 @@ impl Recipe {
             .any(|t| matches!(t, Stage::SwitchFit(f) if !f.late))
     }
 
+    /// Checks stage `i` alone (its values, its references to earlier
+    /// stages, the files it names).
     fn check_stage(&self, i: usize) -> Result<(), DenoiseError> {
-        let bad = |message: String| self.stage_error(self.stages[i].name(), message);
         match &self.stages[i] {
-            Stage::Networks(s) if !s.bundle.is_empty() => {
-                if !s.config.is_empty() || !s.continue_from.is_empty() {
-                    return Err(bad(
-                        "a stage takes its networks from `bundle` or trains them by `config`, not both".into(),
-                    ));
-                }
-                self.bundle_manifest(i, &s.bundle)?;
-            }
-            Stage::Networks(s) => {
-                let config = self.train_config(s)?;
-                if config.stop_after < 6 {
-                    return Err(bad(format!(
-                        "the config trains {} of 6 networks (stop_after): no bundle",
-                        config.stop_after
-                    )));
-                }
-                if !s.continue_from.is_empty() {
-                    self.earlier(i, &s.continue_from, "networks", "continue_from")?;
-                }
-            }
-            Stage::SwitchRows(s) => {
-                self.earlier(i, &s.networks, "networks", "networks")?;
-                if !s.follow.is_empty() {
-                    self.earlier(i, &s.follow, "switch_fit", "follow")?;
-                }
-                if s.pairs.is_empty() {
-                    return Err(bad("no pairs".into()));
-                }
-                if s.iterations == 0 || s.vertex_iterations == 0 || s.min_iteration == 0 {
-                    return Err(bad(
-                        "iterations, vertex_iterations and min_iteration must be positive".into(),
-                    ));
-                }
-                if s.min_iteration > s.iterations {
-                    return Err(bad(format!(
-                        "min_iteration {} > iterations {}: no rows",
-                        s.min_iteration, s.iterations
-                    )));
-                }
-                if !(s.mu_g > 0.0 && s.mu_g < 10.0 && (0.0..=90.0).contains(&s.flat_skip_deg)) {
-                    return Err(bad(
-                        "mu_g must lie in (0, 10), flat_skip_deg in [0, 90]".into()
-                    ));
-                }
-                // the pairs are training data: TrainConfig's checks refuse test models
-                stages::rows_config(s)
-                    .validate(&self.file)
-                    .map_err(|e| bad(e.to_string()))?;
-            }
-            Stage::SwitchFit(s) if !s.bundle.is_empty() => {
-                if !s.rows.is_empty() {
-                    return Err(bad(
-                        "a stage takes its table from `bundle` or fits it on `rows`, not both"
-                            .into(),
-                    ));
-                }
-                let switch = self.bundle_manifest(i, &s.bundle)?.switch;
-                let table = match (switch, s.late) {
-                    (Some(main), false) => Some(main),
-                    (Some(main), true) => main.late.map(|late| *late),
-                    (None, _) => None,
-                };
-                if table.is_none() {
-                    return Err(bad(format!(
-                        "bundle {:?} has no {} switch table",
-                        s.bundle,
-                        if s.late { "late" } else { "main" }
-                    )));
-                }
-                if s.late && !self.main_table_before(i) {
-                    return Err(bad(
-                        "a late table needs an earlier main switch_fit stage".into()
-                    ));
-                }
-            }
-            Stage::SwitchFit(s) => {
-                if s.rows.is_empty() {
-                    return Err(bad("no rows stages".into()));
-                }
-                for r in &s.rows {
-                    self.earlier(i, r, "switch_rows", "rows")?;
-                }
-                if s.hidden == 0 || s.epochs == 0 || s.max_iteration == 0 || s.min_iteration == 0 {
-                    return Err(bad(
-                        "hidden, epochs, max_iteration and min_iteration must be positive".into(),
-                    ));
-                }
-                if s.last_iteration > 0 && s.last_iteration < s.min_iteration {
-                    return Err(bad(format!(
-                        "last_iteration {} < min_iteration {}: no rows",
-                        s.last_iteration, s.min_iteration
-                    )));
-                }
-                if s.late && s.min_iteration <= 1 {
-                    return Err(bad(
-                        "a late table is fitted on the iterations after the main table's clamp: set min_iteration".into(),
-                    ));
-                }
-                if s.late && !self.main_table_before(i) {
-                    return Err(bad(
-                        "a late table needs an earlier main switch_fit stage".into()
-                    ));
-                }
-            }
-            Stage::Cnr(s) => {
-                self.cnr_config(s)?;
-                s.settings
-                    .validate()
-                    .map_err(|e| bad(format!("settings: {e}")))?;
-                if s.settings.seed != crate::cnr::train::CnrTrainSettings::default().seed {
-                    return Err(bad(
-                        "settings: no seed here, the training config's seed is used".into(),
-                    ));
-                }
-            }
-            Stage::Evaluate(s) => {
-                crate::suite::Suite::load(&self.path(&s.suite)).map_err(|e| bad(e.to_string()))?;
-                let params: crate::Params = s.params.clone();
-                if params.contains_key("model") {
-                    return Err(bad("params: the model is the recipe's bundle".into()));
-                }
-            }
+            Stage::Networks(s) if !s.bundle.is_empty() => self.check_taken_networks(i, s),
+            Stage::Networks(s) => self.check_networks(i, s),
+            Stage::SwitchRows(s) => self.check_rows(i, s),
+            Stage::SwitchFit(s) if !s.bundle.is_empty() => self.check_taken_table(i, s),
+            Stage::SwitchFit(s) => self.check_fit(i, s),
+            Stage::Cnr(s) => self.check_cnr(s),
+            Stage::Evaluate(s) => self.check_evaluate(s),
+        }
+    }
+
+    fn check_taken_networks(&self, i: usize, s: &NetworksStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        if !s.config.is_empty() || !s.continue_from.is_empty() {
+            return Err(bad(
+                "a stage takes its networks from `bundle` or trains them by `config`, not both"
+                    .into(),
+            ));
+        }
+        self.bundle_manifest(i, &s.bundle)?;
+        Ok(())
+    }
+
+    fn check_networks(&self, i: usize, s: &NetworksStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        let config = self.train_config(s)?;
+        if config.stop_after < 6 {
+            return Err(bad(format!(
+                "the config trains {} of 6 networks (stop_after): no bundle",
+                config.stop_after
+            )));
+        }
+        if !s.continue_from.is_empty() {
+            self.earlier(i, &s.continue_from, "networks", "continue_from")?;
+        }
+        Ok(())
+    }
+
+    fn check_rows(&self, i: usize, s: &RowsStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        self.earlier(i, &s.networks, "networks", "networks")?;
+        if !s.follow.is_empty() {
+            self.earlier(i, &s.follow, "switch_fit", "follow")?;
+        }
+        if s.pairs.is_empty() {
+            return Err(bad("no pairs".into()));
+        }
+        if s.iterations == 0 || s.vertex_iterations == 0 || s.min_iteration == 0 {
+            return Err(bad(
+                "iterations, vertex_iterations and min_iteration must be positive".into(),
+            ));
+        }
+        if s.min_iteration > s.iterations {
+            return Err(bad(format!(
+                "min_iteration {} > iterations {}: no rows",
+                s.min_iteration, s.iterations
+            )));
+        }
+        if !(s.mu_g > 0.0 && s.mu_g < 10.0 && (0.0..=90.0).contains(&s.flat_skip_deg)) {
+            return Err(bad(
+                "mu_g must lie in (0, 10), flat_skip_deg in [0, 90]".into()
+            ));
+        }
+        // the pairs are training data: TrainConfig's checks refuse test models
+        stages::rows_config(s)
+            .validate(&self.file)
+            .map_err(|e| bad(e.to_string()))?;
+        Ok(())
+    }
+
+    fn check_taken_table(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        if !s.rows.is_empty() {
+            return Err(bad(
+                "a stage takes its table from `bundle` or fits it on `rows`, not both".into(),
+            ));
+        }
+        let switch = self.bundle_manifest(i, &s.bundle)?.switch;
+        let table = match (switch, s.late) {
+            (Some(main), false) => Some(main),
+            (Some(main), true) => main.late.map(|late| *late),
+            (None, _) => None,
+        };
+        if table.is_none() {
+            return Err(bad(format!(
+                "bundle {:?} has no {} switch table",
+                s.bundle,
+                if s.late { "late" } else { "main" }
+            )));
+        }
+        if s.late && !self.main_table_before(i) {
+            return Err(bad(
+                "a late table needs an earlier main switch_fit stage".into()
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_fit(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        if s.rows.is_empty() {
+            return Err(bad("no rows stages".into()));
+        }
+        for r in &s.rows {
+            self.earlier(i, r, "switch_rows", "rows")?;
+        }
+        if s.hidden == 0 || s.epochs == 0 || s.max_iteration == 0 || s.min_iteration == 0 {
+            return Err(bad(
+                "hidden, epochs, max_iteration and min_iteration must be positive".into(),
+            ));
+        }
+        if s.last_iteration > 0 && s.last_iteration < s.min_iteration {
+            return Err(bad(format!(
+                "last_iteration {} < min_iteration {}: no rows",
+                s.last_iteration, s.min_iteration
+            )));
+        }
+        if s.late && s.min_iteration <= 1 {
+            return Err(bad(
+                "a late table is fitted on the iterations after the main table's clamp: set min_iteration".into(),
+            ));
+        }
+        if s.late && !self.main_table_before(i) {
+            return Err(bad(
+                "a late table needs an earlier main switch_fit stage".into()
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_cnr(&self, s: &CnrStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        self.cnr_config(s)?;
+        s.settings
+            .validate()
+            .map_err(|e| bad(format!("settings: {e}")))?;
+        if s.settings.seed != crate::cnr::train::CnrTrainSettings::default().seed {
+            return Err(bad(
+                "settings: no seed here, the training config's seed is used".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_evaluate(&self, s: &EvaluateStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        crate::suite::Suite::load(&self.path(&s.suite)).map_err(|e| bad(e.to_string()))?;
+        let params: crate::Params = s.params.clone();
+        if params.contains_key("model") {
+            return Err(bad("params: the model is the recipe's bundle".into()));
         }
         Ok(())
     }
