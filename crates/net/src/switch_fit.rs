@@ -141,6 +141,62 @@ pub fn fit(
     allowed: &[usize],
     params: &FitParams,
 ) -> Result<(SwitchWeights, FitReport), String> {
+    check_fit_inputs(rows, allowed, params)?;
+    let data = Standardized::new(rows, params.max_iteration);
+    let mask = candidate_mask(allowed);
+    let (candidate_mean_deg, best_mean_deg) = candidate_means(&data.e, allowed);
+    let layout = Layout {
+        h: params.hidden.max(1),
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+    let mut p = initial_parameters(&layout, &mask, &mut rng);
+    let b2_start = layout.len() - NUM_CANDIDATES;
+    let mut adam = Adam::new(p.len());
+    let mut order: Vec<usize> = (0..data.n).collect();
+    let mut epoch_loss = Vec::with_capacity(params.epochs);
+    for _ in 0..params.epochs {
+        order.shuffle(&mut rng);
+        for idx in order.chunks(params.batch.max(1)) {
+            let mut g = batch_gradient(&layout, &p, &data, idx);
+            // the masked biases stay where they are
+            for c in 0..NUM_CANDIDATES {
+                if mask[c] != 0.0 {
+                    g[b2_start + c] = 0.0;
+                }
+            }
+            adam.step(&mut p, &g, params.learning_rate);
+        }
+        epoch_loss.push(mean_loss(&layout, &p, &data));
+    }
+    let (w1, b1, w2, b2) = layout.split(&p);
+    let weights = SwitchWeights {
+        hidden: layout.h,
+        mean: data.mean,
+        std: data.std,
+        w1: w1.to_vec(),
+        b1: b1.to_vec(),
+        w2: w2.to_vec(),
+        b2: b2.to_vec(),
+        max_iteration: params.max_iteration,
+        notes: String::new(),
+        late: None,
+    };
+    weights.validate()?;
+    Ok((
+        weights,
+        FitReport {
+            epoch_loss,
+            candidate_mean_deg,
+            best_mean_deg,
+        },
+    ))
+}
+
+/// Gradients and losses are summed over fixed chunks of rows, so that the
+/// sum order does not depend on the threads.
+const CHUNK: usize = 256;
+
+fn check_fit_inputs(rows: &[f32], allowed: &[usize], params: &FitParams) -> Result<(), String> {
     if rows.is_empty() || !rows.len().is_multiple_of(ROW_LEN) {
         return Err(format!(
             "{} values do not make rows of {ROW_LEN}",
@@ -156,168 +212,182 @@ pub fn fit(
     if params.max_iteration == 0 {
         return Err("max_iteration = 0".into());
     }
-    let n = rows.len() / ROW_LEN;
-    // the features as the switch reads them (the iteration clamped)
-    let feature = |j: usize, x: f32| feature_as_read(j, f64::from(x), params.max_iteration);
-    // feature standardisation
-    let mut mean = vec![0.0; NUM_FEATURES];
-    let mut var = [0.0; NUM_FEATURES];
-    for r in rows.chunks_exact(ROW_LEN) {
-        for (j, (m, x)) in mean.iter_mut().zip(r).enumerate() {
-            *m += feature(j, *x) / n as f64;
+    Ok(())
+}
+
+/// The rows as the fit reads them: features standardised (as the switch
+/// reads them, the iteration clamped), candidate errors in degrees.
+struct Standardized {
+    n: usize,
+    mean: Vec<f64>,
+    std: Vec<f64>,
+    /// `n × NUM_FEATURES` standardised features
+    z: Vec<f64>,
+    /// `n × NUM_CANDIDATES` errors (degrees)
+    e: Vec<f64>,
+}
+
+impl Standardized {
+    fn new(rows: &[f32], max_iteration: usize) -> Standardized {
+        let n = rows.len() / ROW_LEN;
+        let feature = |j: usize, x: f32| feature_as_read(j, f64::from(x), max_iteration);
+        let mut mean = vec![0.0; NUM_FEATURES];
+        let mut var = [0.0; NUM_FEATURES];
+        for r in rows.chunks_exact(ROW_LEN) {
+            for (j, (m, x)) in mean.iter_mut().zip(r).enumerate() {
+                *m += feature(j, *x) / n as f64;
+            }
         }
-    }
-    for r in rows.chunks_exact(ROW_LEN) {
-        for (j, ((v, m), x)) in var.iter_mut().zip(&mean).zip(r).enumerate() {
-            *v += (feature(j, *x) - m).powi(2) / n as f64;
+        for r in rows.chunks_exact(ROW_LEN) {
+            for (j, ((v, m), x)) in var.iter_mut().zip(&mean).zip(r).enumerate() {
+                *v += (feature(j, *x) - m).powi(2) / n as f64;
+            }
         }
+        // a (nearly) constant feature is left unscaled rather than blown up
+        let std: Vec<f64> = var
+            .iter()
+            .map(|v| if v.sqrt() < 1e-6 { 1.0 } else { v.sqrt() })
+            .collect();
+        let z: Vec<f64> = rows
+            .chunks_exact(ROW_LEN)
+            .flat_map(|r| {
+                r[..NUM_FEATURES]
+                    .iter()
+                    .zip(&mean)
+                    .zip(&std)
+                    .enumerate()
+                    .map(|(j, ((x, m), s))| (feature(j, *x) - m) / s)
+            })
+            .collect();
+        let e: Vec<f64> = rows
+            .chunks_exact(ROW_LEN)
+            .flat_map(|r| r[NUM_FEATURES..].iter().map(|x| f64::from(*x).to_degrees()))
+            .collect();
+        Standardized { n, mean, std, z, e }
     }
-    // a (nearly) constant feature is left unscaled rather than blown up
-    let std: Vec<f64> = var
-        .iter()
-        .map(|v| if v.sqrt() < 1e-6 { 1.0 } else { v.sqrt() })
-        .collect();
-    let z: Vec<f64> = rows
-        .chunks_exact(ROW_LEN)
-        .flat_map(|r| {
-            r[..NUM_FEATURES]
-                .iter()
-                .zip(&mean)
-                .zip(&std)
-                .enumerate()
-                .map(|(j, ((x, m), s))| (feature(j, *x) - m) / s)
-        })
-        .collect();
-    let e: Vec<f64> = rows
-        .chunks_exact(ROW_LEN)
-        .flat_map(|r| r[NUM_FEATURES..].iter().map(|x| f64::from(*x).to_degrees()))
-        .collect();
+
+    fn features(&self, i: usize) -> &[f64] {
+        &self.z[i * NUM_FEATURES..(i + 1) * NUM_FEATURES]
+    }
+
+    fn errors(&self, i: usize) -> &[f64] {
+        &self.e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES]
+    }
+}
+
+/// 0 for an allowed candidate, −10⁹ (added to its bias) for the others.
+fn candidate_mask(allowed: &[usize]) -> [f64; NUM_CANDIDATES] {
     let mut mask = [-1e9; NUM_CANDIDATES];
     for &c in allowed {
         mask[c] = 0.0;
     }
+    mask
+}
+
+/// The mean error of each candidate alone, and of the best allowed one per
+/// row (the ceiling of any switch).
+fn candidate_means(e: &[f64], allowed: &[usize]) -> ([f64; NUM_CANDIDATES], f64) {
+    let n = e.len() / NUM_CANDIDATES;
     let mut candidate_mean_deg = [0.0; NUM_CANDIDATES];
     let mut best = 0.0;
-    for i in 0..n {
-        let ei = &e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES];
+    for ei in e.chunks_exact(NUM_CANDIDATES) {
         for (m, x) in candidate_mean_deg.iter_mut().zip(ei) {
             *m += x / n as f64;
         }
         best += allowed.iter().map(|&c| ei[c]).fold(f64::INFINITY, f64::min) / n as f64;
     }
+    (candidate_mean_deg, best)
+}
 
-    let h = params.hidden.max(1);
-    let layout = Layout { h };
-    let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+/// Uniform ±1/√fan-in weights, zero biases, the mask on the output biases.
+fn initial_parameters(
+    layout: &Layout,
+    mask: &[f64; NUM_CANDIDATES],
+    rng: &mut ChaCha8Rng,
+) -> Vec<f64> {
+    use rand::Rng;
+    let h = layout.h;
     let mut p = vec![0.0; layout.len()];
-    {
-        use rand::Rng;
-        let s1 = 1.0 / (NUM_FEATURES as f64).sqrt();
-        let s2 = 1.0 / (h as f64).sqrt();
-        for x in &mut p[..h * NUM_FEATURES] {
-            *x = rng.random_range(-s1..s1);
-        }
-        let w2_start = h * NUM_FEATURES + h;
-        for x in &mut p[w2_start..w2_start + NUM_CANDIDATES * h] {
-            *x = rng.random_range(-s2..s2);
-        }
+    let s1 = 1.0 / (NUM_FEATURES as f64).sqrt();
+    let s2 = 1.0 / (h as f64).sqrt();
+    for x in &mut p[..h * NUM_FEATURES] {
+        *x = rng.random_range(-s1..s1);
+    }
+    let w2_start = h * NUM_FEATURES + h;
+    for x in &mut p[w2_start..w2_start + NUM_CANDIDATES * h] {
+        *x = rng.random_range(-s2..s2);
     }
     let b2_start = layout.len() - NUM_CANDIDATES;
     for (b, m) in p[b2_start..].iter_mut().zip(mask) {
         *b += m;
     }
-    let (beta1, beta2, eps): (f64, f64, f64) = (0.9, 0.999, 1e-8);
-    let mut m1 = vec![0.0; p.len()];
-    let mut m2 = vec![0.0; p.len()];
-    let mut t = 0;
-    let mut order: Vec<usize> = (0..n).collect();
-    let mut epoch_loss = Vec::with_capacity(params.epochs);
-    let batch = params.batch.max(1);
-    // fixed chunks so that the sum order does not depend on the threads
-    const CHUNK: usize = 256;
-    for _ in 0..params.epochs {
-        order.shuffle(&mut rng);
-        for idx in order.chunks(batch) {
-            let grads: Vec<Vec<f64>> = idx
-                .par_chunks(CHUNK)
-                .map(|part| {
-                    let mut g = vec![0.0; p.len()];
-                    for &i in part {
-                        row_loss(
-                            &layout,
-                            &p,
-                            &z[i * NUM_FEATURES..(i + 1) * NUM_FEATURES],
-                            &e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES],
-                            Some(&mut g),
-                        );
-                    }
-                    g
-                })
-                .collect();
+    p
+}
+
+/// The mean gradient of the expected error over the rows `idx`.
+fn batch_gradient(layout: &Layout, p: &[f64], data: &Standardized, idx: &[usize]) -> Vec<f64> {
+    let grads: Vec<Vec<f64>> = idx
+        .par_chunks(CHUNK)
+        .map(|part| {
             let mut g = vec![0.0; p.len()];
-            for part in &grads {
-                for (a, b) in g.iter_mut().zip(part) {
-                    *a += b / idx.len() as f64;
-                }
+            for &i in part {
+                row_loss(layout, p, data.features(i), data.errors(i), Some(&mut g));
             }
-            // the masked biases stay where they are
-            for c in 0..NUM_CANDIDATES {
-                if mask[c] != 0.0 {
-                    g[b2_start + c] = 0.0;
-                }
-            }
-            t += 1;
-            let lr = params.learning_rate * (1.0 - beta2.powi(t)).sqrt() / (1.0 - beta1.powi(t));
-            for (((x, g), a), b) in p.iter_mut().zip(&g).zip(&mut m1).zip(&mut m2) {
-                *a = beta1 * *a + (1.0 - beta1) * g;
-                *b = beta2 * *b + (1.0 - beta2) * g * g;
-                *x -= lr * *a / (b.sqrt() + eps);
-            }
+            g
+        })
+        .collect();
+    let mut g = vec![0.0; p.len()];
+    for part in &grads {
+        for (a, b) in g.iter_mut().zip(part) {
+            *a += b / idx.len() as f64;
         }
-        let loss: f64 = (0..n)
-            .collect::<Vec<_>>()
-            .par_chunks(CHUNK)
-            .map(|part| {
-                part.iter()
-                    .map(|&i| {
-                        row_loss(
-                            &layout,
-                            &p,
-                            &z[i * NUM_FEATURES..(i + 1) * NUM_FEATURES],
-                            &e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES],
-                            None,
-                        )
-                    })
-                    .sum::<f64>()
-            })
-            .collect::<Vec<f64>>()
-            .iter()
-            .sum::<f64>()
-            / n as f64;
-        epoch_loss.push(loss);
     }
-    let (w1, b1, w2, b2) = layout.split(&p);
-    let weights = SwitchWeights {
-        hidden: h,
-        mean,
-        std,
-        w1: w1.to_vec(),
-        b1: b1.to_vec(),
-        w2: w2.to_vec(),
-        b2: b2.to_vec(),
-        max_iteration: params.max_iteration,
-        notes: String::new(),
-        late: None,
-    };
-    weights.validate()?;
-    Ok((
-        weights,
-        FitReport {
-            epoch_loss,
-            candidate_mean_deg,
-            best_mean_deg: best,
-        },
-    ))
+    g
+}
+
+/// The mean expected error (degrees) over all rows.
+fn mean_loss(layout: &Layout, p: &[f64], data: &Standardized) -> f64 {
+    (0..data.n)
+        .collect::<Vec<_>>()
+        .par_chunks(CHUNK)
+        .map(|part| {
+            part.iter()
+                .map(|&i| row_loss(layout, p, data.features(i), data.errors(i), None))
+                .sum::<f64>()
+        })
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum::<f64>()
+        / data.n as f64
+}
+
+/// Adam (β₁ 0.9, β₂ 0.999, ε 1e-8) with its bias correction in the step.
+struct Adam {
+    m1: Vec<f64>,
+    m2: Vec<f64>,
+    t: i32,
+}
+
+impl Adam {
+    fn new(len: usize) -> Adam {
+        Adam {
+            m1: vec![0.0; len],
+            m2: vec![0.0; len],
+            t: 0,
+        }
+    }
+
+    fn step(&mut self, p: &mut [f64], g: &[f64], learning_rate: f64) {
+        let (beta1, beta2, eps): (f64, f64, f64) = (0.9, 0.999, 1e-8);
+        self.t += 1;
+        let t = self.t;
+        let lr = learning_rate * (1.0 - beta2.powi(t)).sqrt() / (1.0 - beta1.powi(t));
+        for (((x, g), a), b) in p.iter_mut().zip(g).zip(&mut self.m1).zip(&mut self.m2) {
+            *a = beta1 * *a + (1.0 - beta1) * g;
+            *b = beta2 * *b + (1.0 - beta2) * g * g;
+            *x -= lr * *a / (b.sqrt() + eps);
+        }
+    }
 }
 
 #[cfg(test)]
