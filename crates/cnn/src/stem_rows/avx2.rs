@@ -240,10 +240,7 @@ unsafe fn stem_tile<const T: usize>(
         // row).
         unsafe {
             let w = q.w16.as_ptr().add(tap_row * PAIRS * CO * 2);
-            for (h, o) in offset.iter_mut().enumerate() {
-                let row_offset = q.offset.as_ptr().add(tap_row * CO + 8 * h);
-                *o = _mm256_add_epi32(*o, _mm256_loadu_si256(row_offset.cast()));
-            }
+            add_row_offset(q, tap_row, &mut offset);
             let x = rows.wide.as_ptr().add(CIN * (x0 + c0));
             for g in 0..PAIRS {
                 let wg = w.add(g * CO * 2);
@@ -294,10 +291,7 @@ unsafe fn stem_tile_vnni<const T: usize>(
         // `rows.bytes` (`c0 + T + K − 1 ≤ len`).
         unsafe {
             let w = q.w.as_ptr().add(tap_row * WINDOW * CO);
-            for (h, o) in offset.iter_mut().enumerate() {
-                let row_offset = q.offset.as_ptr().add(tap_row * CO + 8 * h);
-                *o = _mm256_add_epi32(*o, _mm256_loadu_si256(row_offset.cast()));
-            }
+            add_row_offset(q, tap_row, &mut offset);
             let x = rows.bytes.as_ptr().add(CIN * (x0 + c0));
             for g in 0..WINDOW / 4 {
                 let wg = w.add(g * CO * 4);
@@ -315,6 +309,23 @@ unsafe fn stem_tile_vnni<const T: usize>(
         }
     }
     finish_tile(acc, offset, finish, out, largest);
+}
+
+/// Adds the offset of (kd, kh) row `tap_row` (what the inputs' +128 adds to
+/// its sum, per output channel) to both halves of `offset`.
+///
+/// # Safety
+/// The CPU has AVX2; `(tap_row + 1)·CO ≤ q.offset.len()`.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn add_row_offset(q: &Int8Stem, tap_row: usize, offset: &mut [__m256i; 2]) {
+    debug_assert!((tap_row + 1) * CO <= q.offset.len());
+    for (h, o) in offset.iter_mut().enumerate() {
+        // SAFETY: inside `q.offset` (the caller's bound).
+        let row_offset = unsafe { q.offset.as_ptr().add(tap_row * CO + 8 * h) };
+        // SAFETY: eight i32 from there, still inside.
+        *o = _mm256_add_epi32(*o, unsafe { _mm256_loadu_si256(row_offset.cast()) });
+    }
 }
 
 /// The i32 sums of a tile's cubes, less the rows' offsets, to the outputs
