@@ -6,7 +6,7 @@
 mod common;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use normalnet_cnn::{Cnn, Precision};
+use normalnet_cnn::{Arithmetic, Cnn};
 
 fn forward(c: &mut Criterion) {
     for (name, grid, channels, batch) in [
@@ -25,12 +25,16 @@ fn forward(c: &mut Criterion) {
         g.bench_function(format!("batch{batch}"), |b| {
             b.iter(|| cnn.forward(&grids, &mut out).unwrap())
         });
-        if cnn.set_precision(Precision::Int8) == Precision::Int8 {
+        if cnn.set_arithmetic(Arithmetic::INT8_BLOCKS).int8 {
             g.bench_function(format!("batch{batch}_int8"), |b| {
                 b.iter(|| cnn.forward(&grids, &mut out).unwrap())
             });
             // what denoising runs: int8 stem too, grids handed over sparse
-            if cnn.set_int8_stem(true) {
+            let stem = Arithmetic {
+                int8_stem: true,
+                ..Arithmetic::INT8_BLOCKS
+            };
+            if cnn.set_arithmetic(stem).int8_stem {
                 let sparse = common::sparse_grids(&grids, cnn.grid_len());
                 let samples: Vec<(&[u32], &[f32])> =
                     sparse.iter().map(|(i, v)| (&i[..], &v[..])).collect();
@@ -38,7 +42,7 @@ fn forward(c: &mut Criterion) {
                     b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
                 });
                 // and the shortcuts in int8: every default of `normalnet denoise`
-                if cnn.set_int8_shortcut(true) {
+                if cnn.set_arithmetic(Arithmetic::INT8).int8_shortcut {
                     g.bench_function(format!("batch{batch}_int8_all_sparse"), |b| {
                         b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
                     });

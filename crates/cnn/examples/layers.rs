@@ -6,7 +6,7 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use normalnet_cnn::{Cnn, Precision};
+use normalnet_cnn::{Arithmetic, Cnn};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -22,25 +22,28 @@ fn main() {
         .collect();
     let mut out = vec![0.0f32; samples * 18];
     let forms = [
-        (Precision::F32, false, false),
-        (Precision::F32, true, false),
-        (Precision::Int8, false, false),
-        (Precision::Int8, true, false),
-        (Precision::Int8, true, true),
+        (Arithmetic::F32, false),
+        (Arithmetic::F32, true),
+        (Arithmetic::INT8_BLOCKS, false),
+        (Arithmetic::INT8_BLOCKS, true),
+        (
+            Arithmetic {
+                int8_stem: true,
+                ..Arithmetic::INT8_BLOCKS
+            },
+            true,
+        ),
     ];
-    for (precision, rows, int8_stem) in forms {
-        if cnn.set_precision(precision) != precision {
-            println!("{precision:?}: not available on this CPU");
-            continue;
-        }
+    for (arithmetic, rows) in forms {
         if cnn.set_row_stem(rows) != rows {
             println!("row stem: not available for this network or CPU");
             continue;
         }
-        if cnn.set_int8_stem(int8_stem) != int8_stem {
-            println!("int8 row stem: not available for this network or CPU");
+        if cnn.set_arithmetic(arithmetic) != arithmetic {
+            println!("{arithmetic:?}: not available for this network or CPU");
             continue;
         }
+        let int8_stem = arithmetic.int8_stem;
         let stem = match (rows, int8_stem) {
             (true, true) => "int8 row stem",
             (true, false) => "row stem",
@@ -49,7 +52,8 @@ fn main() {
         cnn.forward_profiled(&grids, &mut out).expect("warm-up");
         let times = cnn.forward_profiled(&grids, &mut out).expect("forward");
         let mut total = 0.0;
-        println!("{preset} {precision:?}, {stem}, µs per sample, one thread:");
+        let blocks = if arithmetic.int8 { "int8" } else { "f32" };
+        println!("{preset} {blocks} blocks, {stem}, µs per sample, one thread:");
         for (layer, s) in times.named() {
             let us = 1e6 * s / samples as f64;
             total += us;

@@ -30,7 +30,7 @@ mod train;
 mod weights;
 
 pub use error::CnnError;
-pub use network::{Cnn, LayerTimes, Precision};
+pub use network::{Arithmetic, Cnn, LayerTimes};
 pub use normalnet_isa::Isa;
 pub use train::{AdamConfig, Loss, Trainer};
 pub use weights::{BatchNormWeights, BlockWeights, ConvWeights, LinearWeights, NetWeights};

@@ -192,25 +192,71 @@ struct Block {
     shortcut: FoldedConv,
     /// output side
     m: usize,
-    /// `a` and `b` in 8-bit integers, once [`Cnn::set_precision`] asked for them
+    /// `a` and `b` in 8-bit integers, once [`Cnn::set_arithmetic`] asked for them
     int8: Option<(Int8Conv, Int8Conv)>,
     /// the shortcut in 8-bit integers, reading the bytes quantized for `a`
     shortcut_int8: Option<Int8Conv>,
 }
 
-/// Arithmetic of the residual blocks' 3³ convolutions.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Precision {
-    /// f32 throughout (the default; equal to the training engine)
-    #[default]
-    F32,
-    /// 8-bit inputs and weights, exact i32 sums, f32 scale, bias and ReLU
-    /// (AVX-512 VNNI, or AVX2 with the same sums; about 1 % of a layer's
-    /// output range per value). The
-    /// stem stays f32 unless [`Cnn::set_int8_stem`] asks for the row stem in
-    /// int8, the 1³ shortcuts unless [`Cnn::set_int8_shortcut`] asks for
-    /// them; the fully connected layers stay f32.
-    Int8,
+/// Which parts of a network run in 8-bit integers; the rest, and every part
+/// the kernel path or the network's shape cannot run so, in f32. One value
+/// for [`Cnn::set_arithmetic`] and the NormalNet parameters (keys `int8`,
+/// `int8_stem`, `int8_shortcut`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default))]
+pub struct Arithmetic {
+    /// the residual blocks' 3³ convolutions: 8-bit inputs and weights,
+    /// exact i32 sums, f32 scale, bias and ReLU (about 1 % of a layer's
+    /// output range per value), on every path with int8 kernels (AVX-512
+    /// VNNI, AVX-VNNI, AVX2: the same sums) and input channels a multiple
+    /// of 4, outputs 16 to 256
+    pub int8: bool,
+    /// with `int8`, the first 5³ convolution (the row stem) in 8-bit
+    /// integers too (on the validation set +0.004° mean E_a without the
+    /// chaotic cone s42, −0.036° with it, for a stem about twice as fast)
+    pub int8_stem: bool,
+    /// with `int8`, the residual blocks' 1³ shortcuts in 8-bit integers
+    /// too, on the bytes quantized for the block's first convolution
+    pub int8_shortcut: bool,
+}
+
+impl Arithmetic {
+    /// f32 throughout: equal to the training engine; a new [`Cnn`]'s.
+    pub const F32: Arithmetic = Arithmetic {
+        int8: false,
+        int8_stem: false,
+        int8_shortcut: false,
+    };
+    /// Every part that has int8 kernels in 8-bit integers.
+    pub const INT8: Arithmetic = Arithmetic {
+        int8: true,
+        int8_stem: true,
+        int8_shortcut: true,
+    };
+    /// The residual blocks' 3³ convolutions alone in 8-bit integers.
+    pub const INT8_BLOCKS: Arithmetic = Arithmetic {
+        int8: true,
+        int8_stem: false,
+        int8_shortcut: false,
+    };
+
+    /// Each part in int8 where both `self` and `other` have it (the
+    /// arithmetic every network of a bundle runs).
+    pub fn and(self, other: Arithmetic) -> Arithmetic {
+        Arithmetic {
+            int8: self.int8 && other.int8,
+            int8_stem: self.int8_stem && other.int8_stem,
+            int8_shortcut: self.int8_shortcut && other.int8_shortcut,
+        }
+    }
+}
+
+/// [`Arithmetic::INT8`]: NormalNet's default arithmetic.
+impl Default for Arithmetic {
+    fn default() -> Self {
+        Arithmetic::INT8
+    }
 }
 
 /// A trained NormalNet network compiled for fast CPU inference.
@@ -230,16 +276,15 @@ pub struct Cnn {
     /// of the sparse pass cover at most [`CubeMask::MAX_SIDE`])
     widest: usize,
     background: Background,
-    /// the blocks run their `int8` convolutions
+    /// the arithmetic asked for ([`Cnn::set_arithmetic`])
+    asked: Arithmetic,
+    /// the blocks run their `int8` convolutions (asked, and this path and
+    /// every block have them)
     int8: bool,
     /// the stem runs as row convolutions (`stem_rows`) instead of the scatter
     row_stem: bool,
-    /// the row stem in 8-bit integers, once [`Cnn::set_precision`] asked for them
+    /// the row stem in 8-bit integers, once [`Cnn::set_arithmetic`] asked for them
     stem_int8: Option<Int8Stem>,
-    /// with int8 precision, the row stem runs `stem_int8`
-    int8_stem: bool,
-    /// with int8 precision, the blocks' shortcuts run in int8
-    int8_shortcut: bool,
 }
 
 /// Activations of an all-empty grid: every cube whose receptive field holds
@@ -401,11 +446,10 @@ impl Cnn {
             largest,
             widest,
             background: Background::default(),
+            asked: Arithmetic::F32,
             int8: false,
             row_stem: false,
             stem_int8: None,
-            int8_stem: false,
-            int8_shortcut: false,
         };
         cnn.set_row_stem(true);
         cnn.record_background();
@@ -453,9 +497,9 @@ impl Cnn {
     /// (tests and benchmarks compare paths in one process). The empty
     /// grid's activations are recomputed on the new path, the stem goes
     /// back to its default form ([`Self::set_row_stem`]`(true)`), and int8
-    /// precision, where the new path has no int8 kernels, falls back to
-    /// f32 (call [`Self::set_precision`] again after moving to a path that
-    /// has them).
+    /// parts, where the new path has no int8 kernels, fall back to f32
+    /// (call [`Self::set_arithmetic`] again after moving to a path that has
+    /// them).
     ///
     /// # Errors
     /// [`CnnError::Isa`] when this CPU does not run `isa`.
@@ -476,13 +520,14 @@ impl Cnn {
         Ok(())
     }
 
-    /// Chooses the arithmetic of the residual blocks' 3³ convolutions and
-    /// returns the one in effect: [`Precision::Int8`] needs AVX-512 VNNI or AVX2 and
-    /// channel counts the kernel handles (inputs a multiple of 4, outputs 16
-    /// to 256); otherwise the network stays [`Precision::F32`].
-    pub fn set_precision(&mut self, precision: Precision) -> Precision {
+    /// Chooses which parts run in 8-bit integers and returns the
+    /// arithmetic in effect ([`Self::arithmetic`]): int8 parts need a path
+    /// with int8 kernels and channel counts they handle; the others stay
+    /// f32.
+    pub fn set_arithmetic(&mut self, arithmetic: Arithmetic) -> Arithmetic {
+        self.asked = arithmetic;
         self.int8 = false;
-        if precision == Precision::Int8 && conv_int8::supported(self.isa) {
+        if arithmetic.int8 && conv_int8::supported(self.isa) {
             for b in &mut self.blocks {
                 if b.int8.is_none() {
                     b.int8 = Int8Conv::new(&b.a).zip(Int8Conv::new(&b.b));
@@ -496,37 +541,30 @@ impl Cnn {
                 self.stem_int8 = Int8Stem::new(&self.stem);
             }
         }
-        self.precision()
+        self.arithmetic()
     }
 
-    /// With [`Precision::Int8`], whether the row stem runs in 8-bit integers
-    /// too or in f32 (the default); returns whether it does now (int8
-    /// precision and the row stem in effect). Opt-in: measured on a
-    /// validation mesh (`examples/int8_error`), it raises the int8 networks'
-    /// mean angle to f32 by about half (0.05 → 0.08° on networks 3–6) for a
-    /// 1.45× faster stem; not yet validated on E_a.
-    pub fn set_int8_stem(&mut self, on: bool) -> bool {
-        self.int8_stem = on;
-        self.runs_int8_stem()
+    /// The arithmetic in effect: int8 blocks where asked and possible; the
+    /// stem in int8 where also asked, the row stem in effect and quantized;
+    /// the shortcuts where also asked and every one quantized.
+    pub fn arithmetic(&self) -> Arithmetic {
+        Arithmetic {
+            int8: self.int8,
+            int8_stem: self.runs_int8_stem(),
+            int8_shortcut: self.runs_int8_shortcut(),
+        }
     }
 
     fn runs_int8_stem(&self) -> bool {
         // VNNI code, or AVX2's `vpmaddwd` with the same sums (int8
-        // precision means a path with one of them)
-        self.int8_stem && self.int8 && self.row_stem && self.stem_int8.is_some()
-    }
-
-    /// With [`Precision::Int8`], whether the residual blocks' 1³ shortcuts
-    /// run in 8-bit integers too (on the bytes quantized for the block's
-    /// first 3³ convolution) or in f32; returns whether they do now (int8
-    /// precision and every shortcut quantized).
-    pub fn set_int8_shortcut(&mut self, on: bool) -> bool {
-        self.int8_shortcut = on;
-        self.runs_int8_shortcut()
+        // blocks mean a path with one of them)
+        self.asked.int8_stem && self.int8 && self.row_stem && self.stem_int8.is_some()
     }
 
     fn runs_int8_shortcut(&self) -> bool {
-        self.int8_shortcut && self.int8 && self.blocks.iter().all(|b| b.shortcut_int8.is_some())
+        self.asked.int8_shortcut
+            && self.int8
+            && self.blocks.iter().all(|b| b.shortcut_int8.is_some())
     }
 
     /// Chooses how the stem runs: as 1D convolutions along the grid rows
@@ -539,15 +577,6 @@ impl Cnn {
             && matches!(self.level, Level::Avx512 | Level::Avx2)
             && stem_rows::serves(&self.stem, self.grid);
         self.row_stem
-    }
-
-    /// The arithmetic in effect (see [`Self::set_precision`]).
-    pub fn precision(&self) -> Precision {
-        if self.int8 {
-            Precision::Int8
-        } else {
-            Precision::F32
-        }
     }
 
     /// Runs the network on a batch.
@@ -834,7 +863,7 @@ impl Cnn {
                             rows,
                             &mut s.quantized,
                         );
-                        // SAFETY: `set_precision` enables int8 only where
+                        // SAFETY: `set_arithmetic` enables int8 only where
                         // `conv_int8::supported` on this network's path.
                         if let Some(q) = shortcut {
                             unsafe {

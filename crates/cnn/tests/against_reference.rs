@@ -2,7 +2,7 @@
 
 mod common;
 
-use normalnet_cnn::{Cnn, CnnError, Isa, NetWeights, Precision};
+use normalnet_cnn::{Arithmetic, Cnn, CnnError, Isa, NetWeights};
 
 /// The fast forward pass on every kernel path this CPU runs (scalar, AVX2,
 /// AVX-512) equals the f64 reference.
@@ -57,15 +57,15 @@ fn int8_blocks_stay_within_quantization_error_of_the_reference() {
     let (grid, batch) = (21, 6);
     let w = common::random_net(5, grid, [16, 32, 64]);
     let mut cnn = Cnn::new(&w).unwrap();
-    assert_eq!(cnn.precision(), Precision::F32, "f32 unless asked");
+    assert_eq!(cnn.arithmetic(), Arithmetic::F32, "f32 unless asked");
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(500 + i as u64, grid))
         .collect();
     let mut exact = vec![0.0f32; batch * 18];
     cnn.forward(&grids, &mut exact).unwrap();
-    if cnn.set_precision(Precision::Int8) != Precision::Int8 {
-        eprintln!("no AVX-512 VNNI on this CPU: int8 falls back to f32 (checked), rest skipped");
-        assert_eq!(cnn.precision(), Precision::F32);
+    if !cnn.set_arithmetic(Arithmetic::INT8_BLOCKS).int8 {
+        eprintln!("no int8 kernels on this CPU: int8 falls back to f32 (checked), rest skipped");
+        assert_eq!(cnn.arithmetic(), Arithmetic::F32);
         return;
     }
     let mut out = vec![0.0f32; batch * 18];
@@ -79,7 +79,7 @@ fn int8_blocks_stay_within_quantization_error_of_the_reference() {
         "int8 gave f32 results ({worst}): not running?"
     );
     // back to f32: the exact outputs again, bit for bit
-    assert_eq!(cnn.set_precision(Precision::F32), Precision::F32);
+    assert_eq!(cnn.set_arithmetic(Arithmetic::F32), Arithmetic::F32);
     cnn.forward(&grids, &mut out).unwrap();
     assert_eq!(out, exact);
 }
@@ -212,14 +212,13 @@ fn the_row_stem_equals_the_scatter() {
 fn the_int8_stem_is_opt_in_and_near_the_reference() {
     let mut outputs: Vec<(Isa, Vec<f32>)> = Vec::new();
     for isa in Isa::all_here().filter(|isa| isa.has_avx2()) {
-        let Some((mut cnn, out)) = int8_option_near_the_reference(5, "stem", isa, |cnn, on| {
-            cnn.set_row_stem(true);
-            cnn.set_int8_stem(on)
-        }) else {
+        let Some((mut cnn, out)) =
+            int8_option_near_the_reference(5, "stem", isa, |a| &mut a.int8_stem)
+        else {
             return;
         };
         // the row stem off: the scatter stem in f32
-        assert!(!cnn.set_row_stem(false) && !cnn.set_int8_stem(true));
+        assert!(!cnn.set_row_stem(false) && !cnn.arithmetic().int8_stem);
         outputs.push((isa, out));
     }
     // the int8 stem and blocks give the same i32 sums on every path, but
@@ -247,43 +246,60 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
 fn the_int8_shortcuts_run_only_with_int8_and_stay_near_the_reference() {
     for isa in Isa::all_here().filter(|isa| isa.has_avx2()) {
         let Some((mut cnn, _)) =
-            int8_option_near_the_reference(6, "shortcuts", isa, Cnn::set_int8_shortcut)
+            int8_option_near_the_reference(6, "shortcuts", isa, |a| &mut a.int8_shortcut)
         else {
             return;
         };
-        cnn.set_precision(Precision::F32);
-        assert!(!cnn.set_int8_shortcut(true), "f32 precision again");
+        let f32_blocks = Arithmetic {
+            int8: false,
+            ..Arithmetic::INT8
+        };
+        assert!(
+            !cnn.set_arithmetic(f32_blocks).int8_shortcut,
+            "f32 blocks again"
+        );
     }
 }
 
-/// An int8 option (`set(cnn, on)`, returning whether it is in effect)
-/// does nothing with f32 precision; with int8 on path `isa` it changes the
-/// outputs and keeps them within [`INT8_TOLERANCE`] of the f64 reference.
+/// An int8 option (the field `option` of [`Arithmetic`]) does nothing with
+/// f32 blocks; with int8 blocks on path `isa` it changes the outputs and
+/// keeps them within [`INT8_TOLERANCE`] of the f64 reference.
 /// Returns the network with int8 and the option on and its outputs, or
 /// `None` on a CPU without int8 kernels.
 fn int8_option_near_the_reference(
     seed: u64,
     what: &str,
     isa: Isa,
-    set: impl Fn(&mut Cnn, bool) -> bool,
+    option: fn(&mut Arithmetic) -> &mut bool,
 ) -> Option<(Cnn, Vec<f32>)> {
+    let with = |blocks: Arithmetic, on: bool| {
+        let mut a = blocks;
+        *option(&mut a) = on;
+        a
+    };
+    let runs = |mut a: Arithmetic| *option(&mut a);
     let (grid, batch) = (21, 6);
     let w = common::random_net(seed, grid, [16, 32, 64]);
     let mut cnn = Cnn::new(&w).unwrap();
     cnn.set_isa(isa).unwrap();
-    assert!(!set(&mut cnn, true), "int8 {what} not with f32 precision");
+    let asked = with(Arithmetic::F32, true);
+    assert!(
+        !runs(cnn.set_arithmetic(asked)),
+        "int8 {what} not with f32 blocks"
+    );
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(100 * seed + i as u64, grid))
         .collect();
-    if cnn.set_precision(Precision::Int8) != Precision::Int8 || !set(&mut cnn, true) {
+    let int8 = with(Arithmetic::INT8_BLOCKS, true);
+    if !runs(cnn.set_arithmetic(int8)) {
         eprintln!("no int8 kernels on {isa}: no int8 {what} (checked), rest skipped");
         return None;
     }
     let mut without = vec![0.0f32; batch * 18];
-    assert!(!set(&mut cnn, false));
+    assert!(!runs(cnn.set_arithmetic(Arithmetic::INT8_BLOCKS)));
     cnn.forward(&grids, &mut without).unwrap();
     let mut out = vec![0.0f32; batch * 18];
-    assert!(set(&mut cnn, true));
+    assert!(runs(cnn.set_arithmetic(int8)));
     cnn.forward(&grids, &mut out).unwrap();
     assert_ne!(out, without, "the int8 {what} did not run");
     let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
@@ -303,14 +319,13 @@ fn sparse_inputs_give_the_dense_outputs_and_bad_ones_are_named() {
     let sparse = common::sparse_grids(&grids, cnn.grid_len());
     let samples: Vec<(&[u32], &[f32])> = sparse.iter().map(|(i, v)| (&i[..], &v[..])).collect();
     // every arithmetic this CPU has: the same bits either way
-    for precision in [Precision::F32, Precision::Int8] {
-        cnn.set_precision(precision);
-        cnn.set_int8_stem(true);
+    for arithmetic in [Arithmetic::F32, Arithmetic::INT8_BLOCKS, Arithmetic::INT8] {
+        cnn.set_arithmetic(arithmetic);
         let mut dense = vec![0.0f32; batch * 18];
         cnn.forward(&grids, &mut dense).unwrap();
         let mut out = vec![0.0f32; batch * 18];
         cnn.forward_sparse(&samples, &mut out).unwrap();
-        assert_eq!(out, dense, "{precision:?}");
+        assert_eq!(out, dense, "{arithmetic:?}");
     }
     let mut out = vec![0.0f32; 18];
     let named = |samples: &[(&[u32], &[f32])], out: &mut [f32]| {
@@ -336,11 +351,11 @@ fn a_sample_gives_the_same_outputs_in_any_batch() {
     let grids: Vec<f32> = (0..batch)
         .flat_map(|i| common::sheet_grid(950 + i as u64, grid))
         .collect();
-    for (isa, precision) in
-        Isa::all_here().flat_map(|isa| [(isa, Precision::F32), (isa, Precision::Int8)])
+    for (isa, arithmetic) in
+        Isa::all_here().flat_map(|isa| [(isa, Arithmetic::F32), (isa, Arithmetic::INT8_BLOCKS)])
     {
         cnn.set_isa(isa).unwrap();
-        cnn.set_precision(precision);
+        cnn.set_arithmetic(arithmetic);
         let mut all = vec![0.0f32; batch * 18];
         cnn.forward(&grids, &mut all).unwrap();
         for (b, grid) in grids.chunks_exact(cnn.grid_len()).enumerate() {
@@ -350,7 +365,7 @@ fn a_sample_gives_the_same_outputs_in_any_batch() {
             assert_eq!(
                 one,
                 all[b * 18..(b + 1) * 18],
-                "{isa} {precision:?} sample {b}"
+                "{isa} {arithmetic:?} sample {b}"
             );
         }
     }
@@ -393,6 +408,6 @@ fn set_isa_refuses_what_the_cpu_lacks_and_drops_int8_where_the_path_has_none() {
         }
     }
     cnn.set_isa(Isa::Scalar).unwrap();
-    assert_eq!(cnn.set_precision(Precision::Int8), Precision::F32);
+    assert_eq!(cnn.set_arithmetic(Arithmetic::INT8), Arithmetic::F32);
     assert_eq!(cnn.instruction_set(), "scalar");
 }

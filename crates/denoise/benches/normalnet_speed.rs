@@ -18,7 +18,7 @@ use normalnet_mesh::noise::{NoiseParams, add_noise};
 use normalnet_mesh::{Mesh, NoProgress, Topology, compare, read_mesh};
 use normalnet_net::bundle::network_for_iteration;
 use normalnet_net::pipeline::filtered_normals;
-use normalnet_net::{Bundle, NUM_OUTPUTS, Precision};
+use normalnet_net::{Arithmetic, Bundle, NUM_OUTPUTS};
 use normalnet_voxel::Voxelizer;
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -192,7 +192,7 @@ fn main() {
     // `cargo bench` passes `--bench`; nothing else is taken
     let f32_bundle = normalnet_net::embedded::lite().expect("built-in bundle");
     let mut int8_bundle = normalnet_net::embedded::lite().expect("built-in bundle");
-    let int8 = int8_bundle.set_precision(Precision::Int8) == Precision::Int8;
+    let int8 = int8_bundle.set_arithmetic(Arithmetic::INT8_BLOCKS).int8;
     let meshes = meshes();
     torch_anchor();
     for (name, mesh, _) in &meshes {

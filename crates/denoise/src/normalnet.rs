@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use normalnet_filters::GnfParams;
 use normalnet_mesh::outliers::denoise_around;
 use normalnet_mesh::{Mesh, Progress};
-use normalnet_net::{Bundle, DenoiseParams, Precision};
+use normalnet_net::{Arithmetic, Bundle, DenoiseParams};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -18,12 +18,6 @@ use crate::registry::{Kind, Method, MethodInfo, Outcome};
 
 /// Environment variable naming a bundle folder (the `model` parameter wins).
 pub const MODEL_ENV: &str = "NORMALNET_MODEL";
-
-/// Whether NormalNet runs its residual blocks in 8-bit integers by default.
-pub const INT8_DEFAULT: bool = true;
-
-/// Whether the shortcuts run in 8-bit integers by default (with `int8`).
-pub const INT8_SHORTCUT_DEFAULT: bool = true;
 
 /// The registry entry.
 pub const INFO: MethodInfo = MethodInfo {
@@ -64,36 +58,6 @@ pub struct NormalnetParams {
     /// the arithmetic of the networks
     #[serde(flatten)]
     pub arithmetic: Arithmetic,
-}
-
-/// The arithmetic of the networks (keys `int8`, `int8_stem`,
-/// `int8_shortcut`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Arithmetic {
-    /// the residual blocks' 3³ convolutions in 8-bit integers where the CPU
-    /// has AVX2 or AVX-512 VNNI (`normalnet_cnn::Precision::Int8`); false, or a CPU
-    /// without it: f32
-    pub int8: bool,
-    /// with `int8`, the first 5³ convolution (the row stem) in 8-bit
-    /// integers too (on: on the validation set +0.004° mean E_a without the
-    /// chaotic cone s42, −0.036° with it, for a stem about twice as fast;
-    /// `Cnn::set_int8_stem`)
-    pub int8_stem: bool,
-    /// with `int8`, the residual blocks' 1³ shortcuts in 8-bit integers
-    /// too, on the bytes quantized for the block's first convolution
-    /// (`Cnn::set_int8_shortcut`)
-    pub int8_shortcut: bool,
-}
-
-impl Default for Arithmetic {
-    fn default() -> Self {
-        Arithmetic {
-            int8: INT8_DEFAULT,
-            int8_stem: INT8_DEFAULT,
-            int8_shortcut: INT8_SHORTCUT_DEFAULT,
-        }
-    }
 }
 
 impl NormalnetParams {
@@ -137,32 +101,20 @@ impl NormalnetParams {
 struct NormalNet {
     params: NormalnetParams,
     bundle: Bundle,
-    /// what `int8` gave on this CPU
-    precision: Precision,
-    /// whether the stem runs in int8 (`int8_stem` where the CPU and network allow)
-    int8_stem: bool,
-    /// whether the shortcuts run in int8 (`int8_shortcut`, as `int8_stem`)
-    int8_shortcut: bool,
+    /// the arithmetic the networks run on this CPU (what the parameters
+    /// asked for where the kernel path and networks allow)
+    arithmetic: Arithmetic,
 }
 
 fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseError> {
     let params: NormalnetParams = resolve(name, given)?;
     params.check()?;
     let mut bundle = params.load_bundle()?;
-    let arithmetic = params.arithmetic;
-    let precision = bundle.set_precision(if arithmetic.int8 {
-        Precision::Int8
-    } else {
-        Precision::F32
-    });
-    let int8_stem = bundle.set_int8_stem(arithmetic.int8_stem);
-    let int8_shortcut = bundle.set_int8_shortcut(arithmetic.int8_shortcut);
+    let arithmetic = bundle.set_arithmetic(params.arithmetic);
     Ok(Box::new(NormalNet {
         params,
         bundle,
-        precision,
-        int8_stem,
-        int8_shortcut,
+        arithmetic,
     }))
 }
 
@@ -172,9 +124,9 @@ impl Method for NormalNet {
         // say which bundle ran, the built-in one included
         v["model"] = Value::String(self.bundle.path.display().to_string());
         // and the arithmetic that ran (int8 falls back to f32 without AVX2)
-        v["int8"] = Value::Bool(self.precision == Precision::Int8);
-        v["int8_stem"] = Value::Bool(self.int8_stem);
-        v["int8_shortcut"] = Value::Bool(self.int8_shortcut);
+        v["int8"] = Value::Bool(self.arithmetic.int8);
+        v["int8_stem"] = Value::Bool(self.arithmetic.int8_stem);
+        v["int8_shortcut"] = Value::Bool(self.arithmetic.int8_shortcut);
         // and the kernel path (NORMALNET_ISA, else the best this CPU runs)
         v["isa"] = Value::String(self.bundle.engines[0].instruction_set().into());
         v

@@ -2,7 +2,7 @@
 //! between the filtered normals (μ_g 0.35 output; residual networks added
 //! to the face normal) of f32 and int8 engines on every face of a mesh —
 //! int8 residual blocks with the f32 stem (the default int8 form), and the
-//! row stem in int8 too (`Cnn::set_int8_stem`).
+//! row stem in int8 too (`Arithmetic::int8_stem`).
 //!
 //! `cargo run --release -p normalnet-net --example int8_error -- MESH [NETWORK 1..6 | all] [BUNDLE]`
 //! (bundle: `models/lite` by default)
@@ -10,7 +10,7 @@
 
 use normalnet_mesh::{NoProgress, Topology, read_mesh};
 use normalnet_net::pipeline::filtered_normals;
-use normalnet_net::{Bundle, Precision};
+use normalnet_net::{Arithmetic, Bundle};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a: Vec<String> = std::env::args().collect();
@@ -22,11 +22,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let bundle = a.get(3).map_or("models/lite", String::as_str);
     let exact = Bundle::load(bundle)?;
     let mut int8 = Bundle::load(bundle)?;
-    if int8.set_precision(Precision::Int8) != Precision::Int8 {
-        return Err("this CPU has no AVX-512 VNNI".into());
+    if !int8.set_arithmetic(Arithmetic::INT8_BLOCKS).int8 {
+        return Err("this CPU has no int8 kernels".into());
     }
     let blocks_only = int8.clone();
-    int8.set_int8_stem(true);
+    int8.set_arithmetic(Arithmetic {
+        int8_stem: true,
+        ..Arithmetic::INT8_BLOCKS
+    });
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
     let slot = exact.output_for_mu_g(0.35);
     for k in networks {

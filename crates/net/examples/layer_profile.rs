@@ -7,7 +7,7 @@
 //! (gathered; the voxelizer hands sparse ones to `normalnet denoise`).
 #![allow(missing_docs)]
 
-use normalnet_cnn::Precision;
+use normalnet_cnn::Arithmetic;
 use normalnet_mesh::Topology;
 use normalnet_voxel::{Scratch, Voxelizer};
 
@@ -21,9 +21,10 @@ fn main() {
     let mesh = normalnet_mesh::io::read_mesh(path).unwrap_or_else(|e| panic!("{path}: {e}"));
     let topo = Topology::new(mesh.num_vertices(), &mesh.faces);
     let mut bundle = normalnet_net::embedded::lite().expect("built-in model");
-    bundle.set_precision(Precision::Int8);
-    bundle.set_int8_stem(true);
-    bundle.set_int8_shortcut(args.get(2).is_none_or(|a| a != "f32-shortcuts"));
+    bundle.set_arithmetic(Arithmetic {
+        int8_shortcut: args.get(2).is_none_or(|a| a != "f32-shortcuts"),
+        ..Arithmetic::INT8
+    });
     let params = bundle.voxel_params();
     let vox = Voxelizer::new(&mesh, &topo, params).expect("voxelizer");
     let len = params.grid_len();

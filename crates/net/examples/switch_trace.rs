@@ -57,8 +57,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => normalnet_net::embedded::lite()?,
     };
     if std::env::var_os("INT8").is_some() {
-        let got = bundle.set_precision(normalnet_cnn::Precision::Int8);
-        eprintln!("precision: {got:?}");
+        let got = bundle.set_arithmetic(normalnet_cnn::Arithmetic::INT8_BLOCKS);
+        eprintln!("arithmetic: {got:?}");
     }
     let settings = TraceSettings {
         iterations,

@@ -14,7 +14,7 @@
 
 use std::path::{Path, PathBuf};
 
-use normalnet_cnn::{Cnn, NetWeights, Precision};
+use normalnet_cnn::{Arithmetic, Cnn, NetWeights};
 use normalnet_voxel::VoxelParams;
 use serde::{Deserialize, Serialize};
 
@@ -279,35 +279,13 @@ pub struct Bundle {
 }
 
 impl Bundle {
-    /// Sets the arithmetic of every network's residual blocks (see
-    /// [`Cnn::set_precision`]) and returns the one in effect.
-    pub fn set_precision(&mut self, precision: Precision) -> Precision {
-        let mut effective = precision;
-        for engine in &mut self.engines {
-            effective = engine.set_precision(precision);
-        }
-        effective
-    }
-
-    /// Whether every network's row stem runs in 8-bit integers with int8
-    /// precision (see [`Cnn::set_int8_stem`]); returns whether it does now.
-    pub fn set_int8_stem(&mut self, on: bool) -> bool {
-        let mut every = on;
-        for engine in &mut self.engines {
-            every &= engine.set_int8_stem(on);
-        }
-        every
-    }
-
-    /// Whether every network's residual-block shortcuts run in 8-bit
-    /// integers with int8 precision (see [`Cnn::set_int8_shortcut`]);
-    /// returns whether they do now.
-    pub fn set_int8_shortcut(&mut self, on: bool) -> bool {
-        let mut every = on;
-        for engine in &mut self.engines {
-            every &= engine.set_int8_shortcut(on);
-        }
-        every
+    /// Sets the arithmetic of every network ([`Cnn::set_arithmetic`]) and
+    /// returns what all of them run: a part is in int8 when it is in every
+    /// network.
+    pub fn set_arithmetic(&mut self, arithmetic: Arithmetic) -> Arithmetic {
+        self.engines.iter_mut().fold(arithmetic, |every, engine| {
+            every.and(engine.set_arithmetic(arithmetic))
+        })
     }
 
     /// Loads the bundle in folder `path`.

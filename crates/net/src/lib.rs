@@ -41,5 +41,5 @@ pub use bundle::{Bundle, Manifest};
 pub use error::NetError;
 #[cfg(feature = "burn")]
 pub use model::NormalNet;
-pub use normalnet_cnn::Precision;
+pub use normalnet_cnn::Arithmetic;
 pub use pipeline::{DenoiseParams, StageTimes, denoise};

@@ -194,7 +194,9 @@ fn write_summary(out: &Path, rows: &[Row]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs `normalnet batch`.
+/// Runs `normalnet batch`: the inputs checked and paired with their outputs
+/// before any work, each denoised in turn (a failure is a row of the
+/// summary, not the end), the summary kept current, the totals printed.
 pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     let info = normalnet_denoise::find(&args.choice.method)?;
     if info.needs_gt() {
@@ -209,6 +211,40 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
             bail!("--suffix {s}: expected one of .obj, .off, .ply, .stl, .gltf, .glb");
         }
     }
+    let jobs = jobs(&args)?;
+    let denoiser = Denoiser::new(info.name, &given_params(&args.choice, info)?)?;
+    let bar = Bar::new(quiet);
+    bar.start(&format!("batch {}", info.name), jobs.len() as u64);
+    let mut rows = Vec::with_capacity(jobs.len());
+    let started = Instant::now();
+    let mut summary_written = Instant::now();
+    for (input, output) in jobs {
+        bar.message(&input.display().to_string());
+        let row = denoise_one(&args, &denoiser, input, output);
+        if let Some(e) = &row.error
+            && !quiet
+        {
+            stderr_line!("{}: failed: {e}", row.input.display());
+        }
+        let failed = row.status == "failed";
+        rows.push(row);
+        // not after every file: the summary grows with the rows, and
+        // rewriting it after each of 20,000 files wrote tens of GB (issue 39)
+        if failed || summary_written.elapsed().as_secs_f64() >= SUMMARY_SECONDS {
+            write_summary(&args.out, &rows)?;
+            summary_written = Instant::now();
+        }
+        bar.advance(1);
+    }
+    write_summary(&args.out, &rows)?;
+    bar.finish();
+    print_totals(&rows, started, &args.out)
+}
+
+/// Every input with its output file, checked before any work: the output
+/// folder is none of the inputs' folders (created), no two inputs write the
+/// same output.
+fn jobs(args: &Args) -> anyhow::Result<Vec<(PathBuf, PathBuf)>> {
     let files = collect_inputs(&args.inputs)?;
     let out_dir = output::canonical(&args.out);
     if let Some(input) = files
@@ -224,12 +260,6 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
-    let denoiser = Denoiser::new(info.name, &given_params(&args.choice, info)?)?;
-    let bar = Bar::new(quiet);
-    bar.start(&format!("batch {}", info.name), files.len() as u64);
-    let mut rows = Vec::with_capacity(files.len());
-    let started = Instant::now();
-    let mut summary_written = Instant::now();
     let stems = output_stems(&files);
     if let Some(dup) = stems
         .iter()
@@ -238,83 +268,86 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     {
         bail!("two inputs would both write {}: rename one", dup.1);
     }
-    for (input, stem) in files.iter().zip(&stems) {
-        let suffix = match &args.suffix {
-            Some(s) => s.trim_start_matches('.').to_string(),
-            None => input
-                .extension()
-                .map(|e| e.to_string_lossy().to_ascii_lowercase())
-                .unwrap_or_else(|| "obj".into()),
-        };
-        let output = args.out.join(format!("{stem}.{suffix}"));
-        bar.message(&input.display().to_string());
-        let t = Instant::now();
-        let mut row = Row {
-            input: input.clone(),
-            output: output.clone(),
-            status: "done",
-            faces: None,
-            seconds: 0.0,
-            error: None,
-        };
-        if output.exists() && !args.overwrite {
-            row.status = "skipped";
-        } else {
-            let result = (|| -> anyhow::Result<()> {
-                output::check_not_input(&output, &[input])?;
-                normalnet_mesh::io::check_writable(&output)?;
-                let file = crate::input::read_mesh_file(input)?;
-                let mesh = &file.mesh;
-                row.faces = Some(mesh.num_faces());
-                let format = super::info::format_for(&output, None)?;
-                normalnet_mesh::io::check_encodable(&output, mesh, format)?;
-                let out = denoiser.denoise(mesh, None, &NoProgress)?;
-                let options = FileWriteOptions {
-                    triangulate: args.triangulate,
-                    ply_ascii: false,
-                };
-                write_result(&output, format, &out, &file.attributes, input, &options)?;
-                Ok(())
-            })();
-            if let Err(e) = result {
-                row.status = "failed";
-                row.error = Some(format!("{e:#}"));
-                if !quiet {
-                    stderr_line!("{}: failed: {e:#}", input.display());
-                }
-            }
+    Ok(files
+        .into_iter()
+        .zip(&stems)
+        .map(|(input, stem)| {
+            let suffix = match &args.suffix {
+                Some(s) => s.trim_start_matches('.').to_string(),
+                None => input
+                    .extension()
+                    .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                    .unwrap_or_else(|| "obj".into()),
+            };
+            let output = args.out.join(format!("{stem}.{suffix}"));
+            (input, output)
+        })
+        .collect())
+}
+
+/// One input denoised into `output` (skipped when it exists, unless
+/// `--overwrite`), as its summary row.
+fn denoise_one(args: &Args, denoiser: &Denoiser, input: PathBuf, output: PathBuf) -> Row {
+    let started = Instant::now();
+    let mut row = Row {
+        input,
+        output,
+        status: "done",
+        faces: None,
+        seconds: 0.0,
+        error: None,
+    };
+    if row.output.exists() && !args.overwrite {
+        row.status = "skipped";
+    } else {
+        let (input, output) = (&row.input, &row.output);
+        let mut faces = None;
+        let result = (|| -> anyhow::Result<()> {
+            output::check_not_input(output, &[input])?;
+            normalnet_mesh::io::check_writable(output)?;
+            let file = crate::input::read_mesh_file(input)?;
+            let mesh = &file.mesh;
+            faces = Some(mesh.num_faces());
+            let format = super::info::format_for(output, None)?;
+            normalnet_mesh::io::check_encodable(output, mesh, format)?;
+            let out = denoiser.denoise(mesh, None, &NoProgress)?;
+            let options = FileWriteOptions {
+                triangulate: args.triangulate,
+                ply_ascii: false,
+            };
+            write_result(output, format, &out, &file.attributes, input, &options)?;
+            Ok(())
+        })();
+        row.faces = faces;
+        if let Err(e) = result {
+            row.status = "failed";
+            row.error = Some(format!("{e:#}"));
         }
-        row.seconds = t.elapsed().as_secs_f64();
-        let failed = row.status == "failed";
-        rows.push(row);
-        // not after every file: the summary grows with the rows, and
-        // rewriting it after each of 20,000 files wrote tens of GB (issue 39)
-        if failed || summary_written.elapsed().as_secs_f64() >= SUMMARY_SECONDS {
-            write_summary(&args.out, &rows)?;
-            summary_written = Instant::now();
-        }
-        bar.advance(1);
     }
-    write_summary(&args.out, &rows)?;
-    bar.finish();
+    row.seconds = started.elapsed().as_secs_f64();
+    row
+}
+
+/// The totals line on stdout; an error when any input failed.
+fn print_totals(rows: &[Row], started: Instant, out: &Path) -> anyhow::Result<()> {
     let count = |s: &str| rows.iter().filter(|r| r.status == s).count();
-    let mut out = std::io::stdout().lock();
+    let summary = out.join("batch_summary.csv");
     writeln!(
-        out,
+        std::io::stdout().lock(),
         "{} files: {} done, {} skipped, {} failed in {:.1} s; summary in {}",
         rows.len(),
         count("done"),
         count("skipped"),
         count("failed"),
         started.elapsed().as_secs_f64(),
-        args.out.join("batch_summary.csv").display()
+        summary.display()
     )?;
     let failed = count("failed");
     if failed > 0 {
         bail!(
             "{failed} of {} inputs failed (see {})",
             rows.len(),
-            args.out.join("batch_summary.csv").display()
+            summary.display()
         );
     }
     Ok(())

@@ -32,10 +32,10 @@ use crate::progress::Bar;
 use anyhow::{Context, bail};
 use normalnet_denoise::flags::{FLAGS, FlagValue};
 use normalnet_denoise::params::parse_assignment;
-use normalnet_denoise::{Denoiser, METHODS, MethodInfo, Params};
+use normalnet_denoise::{Denoiser, METHODS, MethodInfo, Outcome, Params};
 use normalnet_mesh::Mesh;
 use normalnet_mesh::io::{FileWriteOptions, check_encodable};
-use normalnet_mesh::metrics::compare;
+use normalnet_mesh::metrics::{Metrics, compare};
 use normalnet_mesh::outliers::{OutlierParams, outlier_vertices, without_vertices};
 use serde_json::{Value, json};
 use std::io::Write;
@@ -301,43 +301,17 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
     } else {
         (mesh, None)
     };
-    let gt: Option<Mesh> = match &args.gt {
-        Some(path) => {
-            let gt = read_mesh(path)
-                .with_context(|| format!("reading ground truth {}", path.display()))?;
-            let gt = match &removed {
-                Some(r) if gt.num_vertices() == r.mask.len() => without_vertices(&gt, &r.mask)
-                    .map(|(m, _)| m)
-                    .with_context(|| {
-                        format!("{}: no face left without the outliers", path.display())
-                    })?,
-                Some(r) => bail!(
-                    "{}: {} vertices, but {} had {}; --remove-outliers drops the same vertices \
-                     from the ground truth and needs the same vertex count",
-                    path.display(),
-                    gt.num_vertices(),
-                    args.input.display(),
-                    r.mask.len()
-                ),
-                None => gt,
-            };
-            check_ground_truth(path, &gt, &args.input, &mesh)?;
-            Some(gt)
-        }
-        None => None,
-    };
+    let gt = ground_truth(&args, removed.as_ref(), &mesh)?;
     let progress = Bar::new(quiet);
     let t_denoise = Instant::now();
     let outcome = denoiser
         .run(&mesh, gt.as_ref(), &progress)
         .with_context(|| format!("denoising {} with {}", args.input.display(), info.name))?;
-    let (result, stages, folds) = (outcome.mesh, outcome.stages, outcome.folds);
-    let parameters = denoiser.parameters();
     let denoise_seconds = t_denoise.elapsed().as_secs_f64();
     write_result(
         &args.output,
         out_format,
-        &result,
+        &outcome.mesh,
         &attributes,
         &args.input,
         &FileWriteOptions {
@@ -346,58 +320,133 @@ pub fn run(args: Args, quiet: bool) -> anyhow::Result<()> {
         },
     )?;
     let metrics = match &gt {
-        Some(gt) => Some(compare(gt, &result).context("computing metrics")?),
+        Some(gt) => Some(compare(gt, &outcome.mesh).context("computing metrics")?),
         None => None,
     };
-    let total_seconds = t_total.elapsed().as_secs_f64();
-    let method = info.name;
-    let mut out = std::io::stdout().lock();
+    let report = Report {
+        args: &args,
+        method: info.name,
+        vertices: mesh.num_vertices(),
+        faces: mesh.num_faces(),
+        parameters: denoiser.parameters(),
+        denoise_seconds,
+        total_seconds: t_total.elapsed().as_secs_f64(),
+        outcome: &outcome,
+        metrics,
+        removed: removed.as_ref(),
+    };
     if args.json {
+        report.print_json()
+    } else {
+        report.print_text()
+    }
+}
+
+/// The ground truth of `--gt`, without the vertices `--remove-outliers`
+/// dropped from the input, checked against the input `mesh`.
+fn ground_truth(
+    args: &Args,
+    removed: Option<&Removed>,
+    mesh: &Mesh,
+) -> anyhow::Result<Option<Mesh>> {
+    let Some(path) = &args.gt else {
+        return Ok(None);
+    };
+    let gt = read_mesh(path).with_context(|| format!("reading ground truth {}", path.display()))?;
+    let gt = match removed {
+        Some(r) if gt.num_vertices() == r.mask.len() => without_vertices(&gt, &r.mask)
+            .map(|(m, _)| m)
+            .with_context(|| format!("{}: no face left without the outliers", path.display()))?,
+        Some(r) => bail!(
+            "{}: {} vertices, but {} had {}; --remove-outliers drops the same vertices \
+             from the ground truth and needs the same vertex count",
+            path.display(),
+            gt.num_vertices(),
+            args.input.display(),
+            r.mask.len()
+        ),
+        None => gt,
+    };
+    check_ground_truth(path, &gt, &args.input, mesh)?;
+    Ok(Some(gt))
+}
+
+/// What `normalnet denoise` prints when it is done.
+struct Report<'a> {
+    args: &'a Args,
+    method: &'static str,
+    vertices: usize,
+    faces: usize,
+    parameters: Value,
+    denoise_seconds: f64,
+    total_seconds: f64,
+    /// the denoiser's result: its stage times and fold repair
+    outcome: &'a Outcome,
+    metrics: Option<Metrics>,
+    removed: Option<&'a Removed>,
+}
+
+impl Report<'_> {
+    /// `--json`: one object with every figure.
+    fn print_json(&self) -> anyhow::Result<()> {
         let v = json!({
-            "input": args.input,
-            "output": args.output,
-            "method": method,
-            "vertices": mesh.num_vertices(),
-            "faces": mesh.num_faces(),
-            "parameters": parameters,
-            "denoise_seconds": denoise_seconds,
-            "total_seconds": total_seconds,
+            "input": self.args.input,
+            "output": self.args.output,
+            "method": self.method,
+            "vertices": self.vertices,
+            "faces": self.faces,
+            "parameters": self.parameters,
+            "denoise_seconds": self.denoise_seconds,
+            "total_seconds": self.total_seconds,
             "threads": rayon::current_num_threads(),
             "isa": normalnet_denoise::isa::active().name(),
-            "stages": stages,
-            "folds": folds,
-            "gt": args.gt,
-            "metrics": metrics,
-            "removed_outliers": removed.as_ref().map(|r| json!({
+            "stages": self.outcome.stages,
+            "folds": self.outcome.folds,
+            "gt": self.args.gt,
+            "metrics": self.metrics,
+            "removed_outliers": self.removed.map(|r| json!({
                 "vertices": r.vertices,
                 "faces": r.faces,
             })),
         });
-        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
-    } else {
+        writeln!(
+            std::io::stdout().lock(),
+            "{}",
+            serde_json::to_string_pretty(&v)?
+        )?;
+        Ok(())
+    }
+
+    /// A few lines: the run, its parameters, the fold repair when it did
+    /// something, the metrics with `--gt`.
+    fn print_text(&self) -> anyhow::Result<()> {
+        let mut out = std::io::stdout().lock();
         writeln!(
             out,
-            "{} -> {}: {method}, {} vertices, {} faces, denoise {denoise_seconds:.3} s, total {total_seconds:.3} s",
-            args.input.display(),
-            args.output.display(),
-            mesh.num_vertices(),
-            mesh.num_faces()
+            "{} -> {}: {}, {} vertices, {} faces, denoise {:.3} s, total {:.3} s",
+            self.args.input.display(),
+            self.args.output.display(),
+            self.method,
+            self.vertices,
+            self.faces,
+            self.denoise_seconds,
+            self.total_seconds
         )?;
-        writeln!(out, "parameters: {parameters}")?;
-        if let Some(f) = folds.filter(|f| f.before > 0) {
+        writeln!(out, "parameters: {}", self.parameters)?;
+        if let Some(f) = self.outcome.folds.as_ref().filter(|f| f.before > 0) {
             writeln!(
                 out,
                 "folded faces: input {}, method {}, after the repair {} ({} vertices moved)",
                 f.input, f.before, f.after, f.moved
             )?;
         }
-        if let Some(m) = metrics {
+        if let Some(m) = &self.metrics {
             writeln!(
                 out,
                 "E_a {:.3}°  E_v {:.6} (E_v/l_e {:.4})  Hausdorff {:.6}",
                 m.e_a_deg, m.e_v, m.e_v_over_le, m.hausdorff
             )?;
         }
+        Ok(())
     }
-    Ok(())
 }

@@ -401,27 +401,7 @@ pub fn train(
     s: &CnrTrainSettings,
     progress: &dyn Progress,
 ) -> CnrModel {
-    let mut stages = Vec::new();
-    let mut report = vec![format!(
-        "training meshes: {}",
-        train
-            .iter()
-            .map(|m| m.name.as_str())
-            .collect::<Vec<_>>()
-            .join("; ")
-    )];
-    report.push(format!(
-        "validation meshes: {}",
-        validation_meshes
-            .iter()
-            .map(|m| m.name.as_str())
-            .collect::<Vec<_>>()
-            .join("; ")
-    ));
-    report.push(format!(
-        "settings: hidden {}, clusters {}, stages {}, epochs {}, batch {}, Adam lr {}, seed {}, N_v {}, at most {} faces per stage, descriptor ring {}",
-        s.hidden, s.clusters, s.stages, s.epochs, s.batch, s.lr, s.seed, s.vertex_iterations, s.max_samples, s.ring
-    ));
+    let mut report = report_header(&train, &validation_meshes, s);
     progress.start("CNR training", s.stages as u64);
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
     // the descriptors' patches, once: the faces never change
@@ -432,56 +412,12 @@ pub fn train(
             .collect()
     };
     let (train_rings, validation_rings) = (rings_of(&train), rings_of(&validation_meshes));
+    let mut stages = Vec::new();
     for t in 0..s.stages {
         progress.message(&format!("stage {}: descriptors", t + 1));
-        let (mut xs, mut ys) = samples(&train, &train_rings);
-        if xs.len() > s.max_samples {
-            let mut idx: Vec<usize> = (0..xs.len()).collect();
-            idx.shuffle(&mut rng);
-            idx.truncate(s.max_samples);
-            idx.sort_unstable();
-            xs = idx.iter().map(|&i| xs[i]).collect();
-            ys = idx.iter().map(|&i| ys[i]).collect();
-        }
-        let (pca_mean, pca_dirs) = pca(&xs);
-        let mut stage = Stage {
-            pca_mean,
-            pca: pca_dirs,
-            centres: Vec::new(),
-            nets: Vec::new(),
-        };
-        let projected: Vec<[f64; 3]> = xs.iter().map(|x| stage.project(x)).collect();
-        stage.centres = kmeans(&projected, s.clusters, &mut rng);
-        let members: Vec<usize> = projected
-            .iter()
-            .map(|p| nearest(&stage.centres, *p))
-            .collect();
-        progress.message(&format!(
-            "stage {}: {} regressors on {} faces",
-            t + 1,
-            s.clusters,
-            xs.len()
-        ));
-        let trained: Vec<(Mlp, f64, usize)> = (0..s.clusters)
-            .into_par_iter()
-            .map(|c| {
-                let cx: Vec<[f64; FND_LEN]> = (0..xs.len())
-                    .filter(|&i| members[i] == c)
-                    .map(|i| xs[i])
-                    .collect();
-                let cy: Vec<[f64; 3]> = (0..xs.len())
-                    .filter(|&i| members[i] == c)
-                    .map(|i| ys[i])
-                    .collect();
-                let (net, loss) = train_mlp(&cx, &cy, s, s.seed + 1000 * t as u64 + c as u64);
-                (net, loss, cx.len())
-            })
-            .collect();
-        let sizes: Vec<String> = trained
-            .iter()
-            .map(|(_, l, n)| format!("{n} faces mse {l:.5}"))
-            .collect();
-        stage.nets = trained.into_iter().map(|(n, _, _)| n).collect();
+        let (xs, ys) = samples(&train, &train_rings);
+        let (xs, ys) = at_most(xs, ys, s.max_samples, &mut rng);
+        let (stage, sizes) = fit_stage(t, &xs, &ys, s, &mut rng, progress);
         let (before, after) = validation(&validation_meshes, &validation_rings, &stage);
         report.push(format!(
             "stage {}: clusters [{}]; validation mean normal angle {before:.2}° -> {after:.2}° (regressed normals vs ground truth)",
@@ -502,14 +438,7 @@ pub fn train(
         stages.push(stage);
         progress.advance(1);
     }
-    let final_e_a: f64 = {
-        let (mut sum, mut n) = (0.0, 0usize);
-        for m in &validation_meshes {
-            sum += mean_angle(&face_normals(&m.state), &m.gt) * m.state.num_faces() as f64;
-            n += m.state.num_faces();
-        }
-        sum / n.max(1) as f64
-    };
+    let final_e_a = mean_state_angle(&validation_meshes);
     report.push(format!("validation E_a after the cascade: {final_e_a:.2}°"));
     progress.finish();
     CnrModel {
@@ -519,6 +448,117 @@ pub fn train(
         ring: s.ring,
         training: report,
     }
+}
+
+/// The model's training report begins with its meshes and settings.
+fn report_header(
+    train: &[TrainMesh],
+    validation: &[TrainMesh],
+    s: &CnrTrainSettings,
+) -> Vec<String> {
+    let names = |meshes: &[TrainMesh]| {
+        meshes
+            .iter()
+            .map(|m| m.name.as_str())
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    vec![
+        format!("training meshes: {}", names(train)),
+        format!("validation meshes: {}", names(validation)),
+        format!(
+            "settings: hidden {}, clusters {}, stages {}, epochs {}, batch {}, Adam lr {}, seed {}, N_v {}, at most {} faces per stage, descriptor ring {}",
+            s.hidden,
+            s.clusters,
+            s.stages,
+            s.epochs,
+            s.batch,
+            s.lr,
+            s.seed,
+            s.vertex_iterations,
+            s.max_samples,
+            s.ring
+        ),
+    ]
+}
+
+/// At most `max` of the samples, drawn with `rng` and kept in their order.
+fn at_most(
+    xs: Vec<[f64; FND_LEN]>,
+    ys: Vec<[f64; 3]>,
+    max: usize,
+    rng: &mut ChaCha8Rng,
+) -> (Vec<[f64; FND_LEN]>, Vec<[f64; 3]>) {
+    if xs.len() <= max {
+        return (xs, ys);
+    }
+    let mut idx: Vec<usize> = (0..xs.len()).collect();
+    idx.shuffle(rng);
+    idx.truncate(max);
+    idx.sort_unstable();
+    (
+        idx.iter().map(|&i| xs[i]).collect(),
+        idx.iter().map(|&i| ys[i]).collect(),
+    )
+}
+
+/// Stage `t` of the cascade fitted to descriptors `xs` and target normals
+/// `ys`: PCA, k-means clusters, one regressor per cluster (in parallel,
+/// seeded per stage and cluster). Also each cluster's size and loss.
+fn fit_stage(
+    t: usize,
+    xs: &[[f64; FND_LEN]],
+    ys: &[[f64; 3]],
+    s: &CnrTrainSettings,
+    rng: &mut ChaCha8Rng,
+    progress: &dyn Progress,
+) -> (Stage, Vec<String>) {
+    let (pca_mean, pca_dirs) = pca(xs);
+    let mut stage = Stage {
+        pca_mean,
+        pca: pca_dirs,
+        centres: Vec::new(),
+        nets: Vec::new(),
+    };
+    let projected: Vec<[f64; 3]> = xs.iter().map(|x| stage.project(x)).collect();
+    stage.centres = kmeans(&projected, s.clusters, rng);
+    let members: Vec<usize> = projected
+        .iter()
+        .map(|p| nearest(&stage.centres, *p))
+        .collect();
+    progress.message(&format!(
+        "stage {}: {} regressors on {} faces",
+        t + 1,
+        s.clusters,
+        xs.len()
+    ));
+    let trained: Vec<(Mlp, f64, usize)> = (0..s.clusters)
+        .into_par_iter()
+        .map(|c| {
+            let of_cluster = |i: &usize| members[*i] == c;
+            let cx: Vec<[f64; FND_LEN]> = (0..xs.len()).filter(of_cluster).map(|i| xs[i]).collect();
+            let cy: Vec<[f64; 3]> = (0..xs.len()).filter(of_cluster).map(|i| ys[i]).collect();
+            let (net, loss) = train_mlp(&cx, &cy, s, s.seed + 1000 * t as u64 + c as u64);
+            (net, loss, cx.len())
+        })
+        .collect();
+    let sizes = trained
+        .iter()
+        .map(|(_, l, n)| format!("{n} faces mse {l:.5}"))
+        .collect();
+    stage.nets = trained.into_iter().map(|(n, _, _)| n).collect();
+    (stage, sizes)
+}
+
+/// Mean angle of the meshes' face normals against their ground truth,
+/// weighted by face count.
+fn mean_state_angle(meshes: &[TrainMesh]) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for m in meshes {
+        sum += mean_angle(&face_normals(&m.state), &m.gt) * m.state.num_faces() as f64;
+        n += m.state.num_faces();
+    }
+    sum / n.max(1) as f64
 }
 
 #[cfg(test)]

@@ -128,11 +128,11 @@ pub(super) fn switch_rows(
         |e: &dyn std::fmt::Display| recipe_error(dir, format!("stage {:?}: {e}", stage.name));
     let networks = recipe.index_of(&stage.networks).expect("checked");
     let mut bundle = Bundle::load(recipe.stage_dir(out, networks)).map_err(|e| fail(&e))?;
-    let precision = if stage.int8 {
-        bundle.set_precision(normalnet_net::Precision::Int8)
+    let arithmetic = bundle.set_arithmetic(if stage.int8 {
+        normalnet_net::Arithmetic::INT8_BLOCKS
     } else {
-        bundle.set_precision(normalnet_net::Precision::F32)
-    };
+        normalnet_net::Arithmetic::F32
+    });
     let path = if stage.follow.is_empty() {
         TracePath::Candidate(0)
     } else {
@@ -151,7 +151,7 @@ pub(super) fn switch_rows(
     let pairs =
         noisy_pairs(&config, &config.sources, stage.seed, progress).map_err(|e| fail(&e))?;
     let mut report = RowsReport {
-        precision: format!("{precision:?}"),
+        precision: if arithmetic.int8 { "Int8" } else { "F32" }.to_string(),
         pairs: Vec::new(),
     };
     progress.start(&format!("rows {}", stage.name), pairs.len() as u64);

@@ -297,217 +297,258 @@ fn polyhedron(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
     build::prism(m, &build::rect(0.8, 0.8), [0.0, 0.0], 0.8);
 }
 
+/// The centre of every part's profile.
+const ORIGIN: [f64; 2] = [0.0, 0.0];
+
 fn round_sides(r: f64, s: f64) -> usize {
     ((TAU * r / s).ceil() as usize).clamp(12, 2000)
 }
 
+/// Adds one part of `kind` to `m` (`s`: the target edge length of round sides).
 fn build_part(m: &mut EditMesh, kind: ShapeKind, rng: &mut ChaCha8Rng, s: f64) {
-    let o = [0.0, 0.0];
     match kind {
-        ShapeKind::Box => {
-            let p = build::rect(rng.random_range(0.3..1.0), rng.random_range(0.3..1.0));
-            let h = rng.random_range(0.3..1.0);
-            build::prism(m, &p, o, h);
-        }
-        ShapeKind::Cylinder => {
-            let r = rng.random_range(0.2..0.5);
-            let h = rng.random_range(0.3..1.2);
-            let p = build::ngon(round_sides(r, s), r, 0.0);
-            let side = m.add_surface(cone_surface(o, 0.0, r, h, r));
-            loft(
-                m,
-                &[ring(&p, 1.0, o, 0.0, side), ring(&p, 1.0, o, h, 0)],
-                &p,
-                0,
-                None,
-                |q| q,
-            );
-        }
-        ShapeKind::Cone => {
-            let r = rng.random_range(0.25..0.5);
-            let h = rng.random_range(0.3..1.0);
-            let p = build::ngon(round_sides(r, s), r, 0.0);
-            if rng.random_bool(0.4) {
-                let side = m.add_surface(cone_surface(o, 0.0, r, h, 0.0));
-                loft(
-                    m,
-                    &[ring(&p, 1.0, o, 0.0, side)],
-                    &p,
-                    0,
-                    Some([0.0, h, 0.0]),
-                    |q| q,
-                );
-            } else {
-                let t = rng.random_range(0.25..0.75);
-                let side = m.add_surface(cone_surface(o, 0.0, r, h, r * t));
-                loft(
-                    m,
-                    &[ring(&p, 1.0, o, 0.0, side), ring(&p, t, o, h, 0)],
-                    &p,
-                    0,
-                    None,
-                    |q| q,
-                );
-            }
-        }
-        ShapeKind::Prism => {
-            let p = match rng.random_range(0..4) {
-                0 => build::ngon(
-                    rng.random_range(3..9),
-                    rng.random_range(0.3..0.5),
-                    rng.random_range(0.0..TAU),
-                ),
-                1 => build::star(
-                    rng.random_range(4..8),
-                    0.5,
-                    rng.random_range(0.25..0.4),
-                    rng.random_range(0.0..TAU),
-                ),
-                2 => build::l_shape(rng.random_range(0.3..0.6)),
-                _ => build::cross_shape(rng.random_range(0.15..0.35)),
-            };
-            let h = rng.random_range(0.2..1.0);
-            build::prism(m, &p, o, h);
-        }
-        ShapeKind::Chamfered => {
-            let (w, d) = (rng.random_range(0.4..1.0), rng.random_range(0.4..1.0));
-            let p = match rng.random_range(0..3) {
-                0 => build::rect(w, d),
-                1 => build::chamfered_rect(w, d, rng.random_range(0.05..0.3) * w.min(d)),
-                _ => build::ngon(rng.random_range(5..9), w / 2.0, 0.0),
-            };
-            let h = rng.random_range(0.3..0.9);
-            let c = rng.random_range(0.05..0.15);
-            let k = 1.0 - 2.0 * c / w.min(d);
-            let rings = [
-                ring(&p, k, o, 0.0, 0),
-                ring(&p, 1.0, o, c, 0),
-                ring(&p, 1.0, o, h - c, 0),
-                ring(&p, k, o, h, 0),
-            ];
-            loft(m, &rings, &p, 0, None, |q| q);
-        }
-        ShapeKind::Bevelled => {
-            let (w, d) = (rng.random_range(0.5..1.0), rng.random_range(0.5..1.0));
-            let p = match rng.random_range(0..2) {
-                0 => build::rounded_rect(w, d, rng.random_range(0.05..0.2), 4),
-                _ => build::rect(w, d),
-            };
-            let h = rng.random_range(0.4..0.9);
-            let r = rng.random_range(0.08..0.18);
-            let c = rng.random_range(0.03..0.1);
-            let scale = |delta: f64| 1.0 - 2.0 * delta / w.min(d);
-            let mut rings: Vec<Ring> = vec![ring(&p, scale(c), o, 0.0, 0), ring(&p, 1.0, o, c, 0)];
-            let steps = 5;
-            for i in 0..=steps {
-                let t = FRAC_PI_2 * i as f64 / steps as f64;
-                rings.push(ring(
-                    &p,
-                    scale(r * (1.0 - t.cos())),
-                    o,
-                    h - r + r * t.sin(),
-                    0,
-                ));
-            }
-            loft(m, &rings, &p, 0, None, |q| q);
-        }
-        ShapeKind::Notched => {
-            let (w, d) = (rng.random_range(0.6..1.2), rng.random_range(0.4..0.8));
-            let count = rng.random_range(1..=3);
-            let slot = w / (2 * count + 1) as f64;
-            let notches: Vec<(f64, f64, f64)> = (0..count)
-                .map(|i| {
-                    let cx = -w / 2.0 + slot * (2 * i + 1) as f64 + slot / 2.0;
-                    (
-                        cx,
-                        slot * rng.random_range(0.5..0.95),
-                        d * rng.random_range(0.2..0.6),
-                    )
-                })
-                .collect();
-            let p = build::notched_rect(w, d, &notches);
-            let h = rng.random_range(0.2..0.6);
-            build::prism(m, &p, o, h);
-        }
-        ShapeKind::Ruled => {
-            let (w, d) = (rng.random_range(0.6..1.2), rng.random_range(0.4..0.9));
-            let p = match rng.random_range(0..2) {
-                0 => build::rect(w, d),
-                _ => build::chamfered_rect(w, d, rng.random_range(0.1..0.3) * d),
-            };
-            let h = rng.random_range(0.4..0.8);
-            let top = Surface::Ruled {
-                base: h,
-                amp: rng.random_range(0.05..0.2) * h,
-                freq: rng.random_range(2.0..8.0),
-                phase: rng.random_range(0.0..TAU),
-                slope: rng.random_range(-0.3..0.3),
-            };
-            // Splits of the wall tops move onto the wave (a height field:
-            // vertical moves keep the triangulation valid).
-            let tag = m.add_surface(top.clone());
-            loft(
-                m,
-                &[ring(&p, 1.0, o, 0.0, 0), ring(&p, 1.0, o, h, 0)],
-                &p,
-                tag,
-                None,
-                |q| [q[0], top.height(q[0]), q[2]],
-            );
-        }
-        ShapeKind::Blob => {
-            let terms = (0..rng.random_range(3..6))
-                .map(|_| {
-                    let u = vec3::normalize_or_zero([0; 3].map(|_| rng.random_range(-1.0..1.0)));
-                    let u = if u == [0.0; 3] { [0.0, 1.0, 0.0] } else { u };
-                    (
-                        rng.random_range(0.04..0.14),
-                        rng.random_range(1.5..4.0),
-                        u,
-                        rng.random_range(0.0..TAU),
-                    )
-                })
-                .collect();
-            let tag = m.add_surface(Surface::Blob {
-                centre: [0.0; 3],
-                terms,
-            });
-            let first = m.positions.len();
-            build::icosahedron(m, tag);
-            for v in first..m.positions.len() {
-                let p = m.positions[v];
-                m.positions[v] = m.surfaces[tag as usize].project(p);
-            }
-        }
+        ShapeKind::Box => box_part(m, rng),
+        ShapeKind::Cylinder => cylinder(m, rng, s),
+        ShapeKind::Cone => cone(m, rng, s),
+        ShapeKind::Prism => prism_part(m, rng),
+        ShapeKind::Chamfered => chamfered(m, rng),
+        ShapeKind::Bevelled => bevelled(m, rng),
+        ShapeKind::Notched => notched(m, rng),
+        ShapeKind::Ruled => ruled(m, rng),
+        ShapeKind::Blob => blob(m, rng),
         ShapeKind::Polyhedron => polyhedron(m, rng),
-        ShapeKind::Union => {
-            let parts = rng.random_range(2..=3);
-            let kinds = [
-                ShapeKind::Box,
-                ShapeKind::Cylinder,
-                ShapeKind::Cone,
-                ShapeKind::Prism,
-                ShapeKind::Chamfered,
-                ShapeKind::Bevelled,
-                ShapeKind::Notched,
-                ShapeKind::Ruled,
-            ];
-            let mut x = 0.0;
-            for _ in 0..parts {
-                let kind = *kinds.choose(rng).expect("non-empty");
-                let mut part = EditMesh::new();
-                build_part(&mut part, kind, rng, s);
-                let (lo, hi) = part.bounds();
-                let gap = rng.random_range(0.05..0.3);
-                part.translate([
-                    x - lo[0],
-                    rng.random_range(-0.2..0.2) - lo[1],
-                    rng.random_range(-0.3..0.3),
-                ]);
-                x += hi[0] - lo[0] + gap;
-                m.append(&part);
-            }
-        }
+        ShapeKind::Union => union(m, rng, s),
+    }
+}
+
+/// A box.
+fn box_part(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let o = ORIGIN;
+    let p = build::rect(rng.random_range(0.3..1.0), rng.random_range(0.3..1.0));
+    let h = rng.random_range(0.3..1.0);
+    build::prism(m, &p, o, h);
+}
+
+/// A cylinder: its side on the cone surface of equal radii.
+fn cylinder(m: &mut EditMesh, rng: &mut ChaCha8Rng, s: f64) {
+    let o = ORIGIN;
+    let r = rng.random_range(0.2..0.5);
+    let h = rng.random_range(0.3..1.2);
+    let p = build::ngon(round_sides(r, s), r, 0.0);
+    let side = m.add_surface(cone_surface(o, 0.0, r, h, r));
+    loft(
+        m,
+        &[ring(&p, 1.0, o, 0.0, side), ring(&p, 1.0, o, h, 0)],
+        &p,
+        0,
+        None,
+        |q| q,
+    );
+}
+
+/// A cone, pointed (40 %) or cut off.
+fn cone(m: &mut EditMesh, rng: &mut ChaCha8Rng, s: f64) {
+    let o = ORIGIN;
+    let r = rng.random_range(0.25..0.5);
+    let h = rng.random_range(0.3..1.0);
+    let p = build::ngon(round_sides(r, s), r, 0.0);
+    if rng.random_bool(0.4) {
+        let side = m.add_surface(cone_surface(o, 0.0, r, h, 0.0));
+        loft(
+            m,
+            &[ring(&p, 1.0, o, 0.0, side)],
+            &p,
+            0,
+            Some([0.0, h, 0.0]),
+            |q| q,
+        );
+    } else {
+        let t = rng.random_range(0.25..0.75);
+        let side = m.add_surface(cone_surface(o, 0.0, r, h, r * t));
+        loft(
+            m,
+            &[ring(&p, 1.0, o, 0.0, side), ring(&p, t, o, h, 0)],
+            &p,
+            0,
+            None,
+            |q| q,
+        );
+    }
+}
+
+/// A prism over a polygon, star, L or cross.
+fn prism_part(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let o = ORIGIN;
+    let p = match rng.random_range(0..4) {
+        0 => build::ngon(
+            rng.random_range(3..9),
+            rng.random_range(0.3..0.5),
+            rng.random_range(0.0..TAU),
+        ),
+        1 => build::star(
+            rng.random_range(4..8),
+            0.5,
+            rng.random_range(0.25..0.4),
+            rng.random_range(0.0..TAU),
+        ),
+        2 => build::l_shape(rng.random_range(0.3..0.6)),
+        _ => build::cross_shape(rng.random_range(0.15..0.35)),
+    };
+    let h = rng.random_range(0.2..1.0);
+    build::prism(m, &p, o, h);
+}
+
+/// A prism over a rectangle or polygon with chamfered top and bottom edges.
+fn chamfered(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let o = ORIGIN;
+    let (w, d) = (rng.random_range(0.4..1.0), rng.random_range(0.4..1.0));
+    let p = match rng.random_range(0..3) {
+        0 => build::rect(w, d),
+        1 => build::chamfered_rect(w, d, rng.random_range(0.05..0.3) * w.min(d)),
+        _ => build::ngon(rng.random_range(5..9), w / 2.0, 0.0),
+    };
+    let h = rng.random_range(0.3..0.9);
+    let c = rng.random_range(0.05..0.15);
+    let k = 1.0 - 2.0 * c / w.min(d);
+    let rings = [
+        ring(&p, k, o, 0.0, 0),
+        ring(&p, 1.0, o, c, 0),
+        ring(&p, 1.0, o, h - c, 0),
+        ring(&p, k, o, h, 0),
+    ];
+    loft(m, &rings, &p, 0, None, |q| q);
+}
+
+/// A prism with a chamfered foot and a rounded top edge.
+fn bevelled(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let o = ORIGIN;
+    let (w, d) = (rng.random_range(0.5..1.0), rng.random_range(0.5..1.0));
+    let p = match rng.random_range(0..2) {
+        0 => build::rounded_rect(w, d, rng.random_range(0.05..0.2), 4),
+        _ => build::rect(w, d),
+    };
+    let h = rng.random_range(0.4..0.9);
+    let r = rng.random_range(0.08..0.18);
+    let c = rng.random_range(0.03..0.1);
+    let scale = |delta: f64| 1.0 - 2.0 * delta / w.min(d);
+    let mut rings: Vec<Ring> = vec![ring(&p, scale(c), o, 0.0, 0), ring(&p, 1.0, o, c, 0)];
+    let steps = 5;
+    for i in 0..=steps {
+        let t = FRAC_PI_2 * i as f64 / steps as f64;
+        rings.push(ring(
+            &p,
+            scale(r * (1.0 - t.cos())),
+            o,
+            h - r + r * t.sin(),
+            0,
+        ));
+    }
+    loft(m, &rings, &p, 0, None, |q| q);
+}
+
+/// A rectangle with one to three notches, extruded.
+fn notched(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let o = ORIGIN;
+    let (w, d) = (rng.random_range(0.6..1.2), rng.random_range(0.4..0.8));
+    let count = rng.random_range(1..=3);
+    let slot = w / (2 * count + 1) as f64;
+    let notches: Vec<(f64, f64, f64)> = (0..count)
+        .map(|i| {
+            let cx = -w / 2.0 + slot * (2 * i + 1) as f64 + slot / 2.0;
+            (
+                cx,
+                slot * rng.random_range(0.5..0.95),
+                d * rng.random_range(0.2..0.6),
+            )
+        })
+        .collect();
+    let p = build::notched_rect(w, d, &notches);
+    let h = rng.random_range(0.2..0.6);
+    build::prism(m, &p, o, h);
+}
+
+/// A prism whose top is a ruled wave (a height field).
+fn ruled(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let o = ORIGIN;
+    let (w, d) = (rng.random_range(0.6..1.2), rng.random_range(0.4..0.9));
+    let p = match rng.random_range(0..2) {
+        0 => build::rect(w, d),
+        _ => build::chamfered_rect(w, d, rng.random_range(0.1..0.3) * d),
+    };
+    let h = rng.random_range(0.4..0.8);
+    let top = Surface::Ruled {
+        base: h,
+        amp: rng.random_range(0.05..0.2) * h,
+        freq: rng.random_range(2.0..8.0),
+        phase: rng.random_range(0.0..TAU),
+        slope: rng.random_range(-0.3..0.3),
+    };
+    // Splits of the wall tops move onto the wave (a height field:
+    // vertical moves keep the triangulation valid).
+    let tag = m.add_surface(top.clone());
+    loft(
+        m,
+        &[ring(&p, 1.0, o, 0.0, 0), ring(&p, 1.0, o, h, 0)],
+        &p,
+        tag,
+        None,
+        |q| [q[0], top.height(q[0]), q[2]],
+    );
+}
+
+/// A smooth blob: an icosphere projected onto a sum of waves over the sphere.
+fn blob(m: &mut EditMesh, rng: &mut ChaCha8Rng) {
+    let terms = (0..rng.random_range(3..6))
+        .map(|_| {
+            let u = vec3::normalize_or_zero([0; 3].map(|_| rng.random_range(-1.0..1.0)));
+            let u = if u == [0.0; 3] { [0.0, 1.0, 0.0] } else { u };
+            (
+                rng.random_range(0.04..0.14),
+                rng.random_range(1.5..4.0),
+                u,
+                rng.random_range(0.0..TAU),
+            )
+        })
+        .collect();
+    let tag = m.add_surface(Surface::Blob {
+        centre: [0.0; 3],
+        terms,
+    });
+    let first = m.positions.len();
+    build::icosahedron(m, tag);
+    for v in first..m.positions.len() {
+        let p = m.positions[v];
+        m.positions[v] = m.surfaces[tag as usize].project(p);
+    }
+}
+
+/// Two or three parts of the other kinds side by side, touching or not.
+fn union(m: &mut EditMesh, rng: &mut ChaCha8Rng, s: f64) {
+    let parts = rng.random_range(2..=3);
+    let kinds = [
+        ShapeKind::Box,
+        ShapeKind::Cylinder,
+        ShapeKind::Cone,
+        ShapeKind::Prism,
+        ShapeKind::Chamfered,
+        ShapeKind::Bevelled,
+        ShapeKind::Notched,
+        ShapeKind::Ruled,
+    ];
+    let mut x = 0.0;
+    for _ in 0..parts {
+        let kind = *kinds.choose(rng).expect("non-empty");
+        let mut part = EditMesh::new();
+        build_part(&mut part, kind, rng, s);
+        let (lo, hi) = part.bounds();
+        let gap = rng.random_range(0.05..0.3);
+        part.translate([
+            x - lo[0],
+            rng.random_range(-0.2..0.2) - lo[1],
+            rng.random_range(-0.3..0.3),
+        ]);
+        x += hi[0] - lo[0] + gap;
+        m.append(&part);
     }
 }
 
