@@ -321,14 +321,11 @@ impl Bench<'_> {
         if self.settings.skips(model, method) {
             self.ui.line(&format!("{at}: skipped by the settings"));
             self.report.records.push(RunRecord {
-                model: model.to_string(),
-                noise: split_model_name(model).1,
-                method: method.to_string(),
                 skipped: Some(format!(
                     "{}: [models.\"{model}\"] skip",
                     self.settings.source
                 )),
-                ..Default::default()
+                ..record(model, method, String::new())
             });
             return Ok(None);
         }
@@ -433,6 +430,18 @@ fn guarded<T>(what: &str, f: impl FnOnce() -> anyhow::Result<T>) -> anyhow::Resu
     }
 }
 
+/// The record of `method` on `model` with nothing measured yet.
+fn record(model: &str, method: &str, params: String) -> RunRecord {
+    RunRecord {
+        model: model.to_string(),
+        noise: split_model_name(model).1,
+        method: method.to_string(),
+        params,
+        ..Default::default()
+    }
+}
+
+/// The record of a run that gave metrics `m`.
 fn record_from(
     model: &str,
     method: &str,
@@ -442,10 +451,6 @@ fn record_from(
     total_s: f64,
 ) -> RunRecord {
     RunRecord {
-        model: model.to_string(),
-        noise: split_model_name(model).1,
-        method: method.to_string(),
-        params,
         e_a_deg: Some(m.e_a_deg),
         e_v: Some(m.e_v),
         e_v_over_le: Some(m.e_v_over_le),
@@ -453,11 +458,11 @@ fn record_from(
         flipped_faces: Some(m.flipped_faces),
         denoise_seconds: denoise_s,
         total_seconds: Some(total_s),
-        error: None,
-        skipped: None,
+        ..record(model, method, params)
     }
 }
 
+/// The record of a run that failed with `error`.
 fn failed(
     model: &str,
     method: &str,
@@ -466,13 +471,9 @@ fn failed(
     total_s: f64,
 ) -> RunRecord {
     RunRecord {
-        model: model.to_string(),
-        noise: split_model_name(model).1,
-        method: method.to_string(),
-        params,
         total_seconds: Some(total_s),
         error: Some(format!("{error:#}")),
-        ..Default::default()
+        ..record(model, method, params)
     }
 }
 
