@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{interrupt_and_wait, normalnet, s, sphere, stderr};
+use common::{interrupt_and_wait, normalnet, s, spawn_long_denoise, sphere, stderr};
 use normalnet_mesh::{Mesh, write_mesh};
 use std::process::Command;
 use std::time::Duration;
@@ -195,16 +195,7 @@ fn issue_14_info_reports_bow_ties_and_orientation() {
 #[test]
 fn issue_14_interrupt_removes_temporary_files() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("in.obj");
-    write_mesh(&input, &sphere(60, 120)).unwrap();
-    let out = dir.path().join("out.obj");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_normalnet"))
-        .args(["denoise", "-q", "-m", "gnf", "--iterations", "100000"])
-        .arg(&input)
-        .arg(&out)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (mut child, out) = spawn_long_denoise(dir.path());
     // What an interrupted write leaves: a temporary file of this child.
     let leftover = dir
         .path()

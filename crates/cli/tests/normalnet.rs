@@ -2,7 +2,7 @@
 //! the shipped bundle (models/lite) on a small generated noisy shape, the
 //! bundle lookup (--model, NORMALNET_MODEL) and its error messages.
 
-use normalnet_mesh::{NoiseParams, add_noise, read_mesh, write_mesh};
+use normalnet_mesh::{read_mesh, write_mesh};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -13,16 +13,7 @@ fn normalnet() -> Command {
 }
 
 fn noisy_shape(dir: &Path) -> PathBuf {
-    let clean = normalnet_voxel::shapes::generate_seeded(4, 300).unwrap();
-    let noisy = add_noise(
-        &clean,
-        &NoiseParams {
-            level: 0.3,
-            seed: 9,
-            ..NoiseParams::default()
-        },
-    )
-    .unwrap();
+    let (clean, noisy) = normalnet_voxel::shapes::noisy_pair(4, 300, 0.3, 9).unwrap();
     let path = dir.join("noisy.obj");
     write_mesh(&path, &noisy).unwrap();
     write_mesh(dir.join("clean.obj"), &clean).unwrap();

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{interrupt_and_wait, normalnet, s, sphere, stderr};
+use common::{interrupt_and_wait, normalnet, s, spawn_long_denoise, sphere, stderr};
 use normalnet_mesh::{Mesh, read_mesh, write_mesh};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
@@ -71,16 +71,7 @@ fn a_closed_stdout_ends_quietly() {
 #[test]
 fn an_interrupt_with_a_closed_stderr_still_exits() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("in.obj");
-    write_mesh(&input, &sphere(60, 120)).unwrap();
-    let out = dir.path().join("out.obj");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_normalnet"))
-        .args(["denoise", "-q", "-m", "gnf", "--iterations", "100000"])
-        .arg(&input)
-        .arg(&out)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (mut child, out) = spawn_long_denoise(dir.path());
     drop(child.stderr.take());
     std::thread::sleep(Duration::from_millis(1500));
     let status = interrupt_and_wait(&mut child, " with a closed stderr");

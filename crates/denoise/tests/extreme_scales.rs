@@ -10,21 +10,12 @@
 use normalnet_denoise::{DenoiseError, Denoiser};
 use normalnet_filters::{GnfParams, Sun07Params};
 use normalnet_mesh::scale::{bounding_box_diagonal, exponent, mul_pow2};
-use normalnet_mesh::{Mesh, NoProgress, NoiseParams, add_noise};
+use normalnet_mesh::{Mesh, NoProgress};
 
 /// A small noisy CAD-like shape (and its clean form), scaled by a power of
 /// two so that its bounding-box diagonal lies in `[1, 2)`.
 fn meshes() -> (Mesh, Mesh) {
-    let clean = normalnet_voxel::shapes::generate_seeded(5, 300).unwrap();
-    let noisy = add_noise(
-        &clean,
-        &NoiseParams {
-            level: 0.3,
-            seed: 5,
-            ..NoiseParams::default()
-        },
-    )
-    .unwrap();
+    let (clean, noisy) = normalnet_voxel::shapes::noisy_pair(5, 300, 0.3, 5).unwrap();
     let k = -exponent(bounding_box_diagonal(&noisy));
     (scaled_pow2(&clean, k), scaled_pow2(&noisy, k))
 }

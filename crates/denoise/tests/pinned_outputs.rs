@@ -14,19 +14,10 @@
 
 use normalnet_denoise::isa::Isa;
 use normalnet_denoise::{Denoiser, Params};
-use normalnet_mesh::{Mesh, NoProgress, NoiseParams, add_noise};
+use normalnet_mesh::{Mesh, NoProgress};
 
 fn meshes() -> (Mesh, Mesh) {
-    let clean = normalnet_voxel::shapes::generate_seeded(5, 800).unwrap();
-    let noisy = add_noise(
-        &clean,
-        &NoiseParams {
-            level: 0.3,
-            seed: 5,
-            ..NoiseParams::default()
-        },
-    )
-    .unwrap();
+    let (clean, noisy) = normalnet_voxel::shapes::noisy_pair(5, 800, 0.3, 5).unwrap();
     (clean, noisy)
 }
 

@@ -3,20 +3,11 @@
 //! order. Sanity bounds, not reference figures.
 
 use normalnet_denoise::{Denoiser, Params};
+use normalnet_mesh::NoProgress;
 use normalnet_mesh::metrics::compare;
-use normalnet_mesh::{NoProgress, NoiseParams, add_noise};
 
 fn shape() -> (normalnet_mesh::Mesh, normalnet_mesh::Mesh) {
-    let clean = normalnet_voxel::shapes::generate_seeded(77, 1500).unwrap();
-    let noisy = add_noise(
-        &clean,
-        &NoiseParams {
-            level: 0.3,
-            seed: 77,
-            ..NoiseParams::default()
-        },
-    )
-    .unwrap();
+    let (clean, noisy) = normalnet_voxel::shapes::noisy_pair(77, 1500, 0.3, 77).unwrap();
     (clean, noisy)
 }
 

@@ -193,15 +193,7 @@ pub fn bi(mesh: &Mesh, params: &BiParams, progress: &dyn Progress) -> Result<Mes
     ))
 }
 
-impl crate::ClassicalMethod for BiParams {
-    fn check(&self) -> Result<(), FilterError> {
-        self.validate()
-    }
-
-    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
-        bi(mesh, self, progress)
-    }
-}
+crate::classical_method!(BiParams, bi);
 
 #[cfg(test)]
 mod tests {

@@ -186,12 +186,4 @@ pub fn bnf(mesh: &Mesh, params: &BnfParams, progress: &dyn Progress) -> Result<M
     ))
 }
 
-impl crate::ClassicalMethod for BnfParams {
-    fn check(&self) -> Result<(), FilterError> {
-        self.validate()
-    }
-
-    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
-        bnf(mesh, self, progress)
-    }
-}
+crate::classical_method!(BnfParams, bnf);

@@ -320,15 +320,7 @@ pub fn gnf(mesh: &Mesh, params: &GnfParams, progress: &dyn Progress) -> Result<M
     ))
 }
 
-impl crate::ClassicalMethod for GnfParams {
-    fn check(&self) -> Result<(), FilterError> {
-        self.validate()
-    }
-
-    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
-        gnf(mesh, self, progress)
-    }
-}
+crate::classical_method!(GnfParams, gnf);
 
 #[cfg(test)]
 mod tests {

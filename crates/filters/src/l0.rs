@@ -401,15 +401,7 @@ pub fn l0(mesh: &Mesh, params: &L0Params, progress: &dyn Progress) -> Result<Mes
     Ok(mesh.with_positions(positions))
 }
 
-impl crate::ClassicalMethod for L0Params {
-    fn check(&self) -> Result<(), FilterError> {
-        self.validate()
-    }
-
-    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
-        l0(mesh, self, progress)
-    }
-}
+crate::classical_method!(L0Params, l0);
 
 #[cfg(test)]
 mod tests {

@@ -60,6 +60,28 @@ pub trait ClassicalMethod:
     fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError>;
 }
 
+/// [`ClassicalMethod`] for a parameter struct with a `validate` method and
+/// its method's function `fn(&Mesh, &Params, &dyn Progress)`: the one
+/// implementation every filter file shares.
+macro_rules! classical_method {
+    ($params:ty, $denoise:path) => {
+        impl $crate::ClassicalMethod for $params {
+            fn check(&self) -> Result<(), $crate::FilterError> {
+                self.validate()
+            }
+
+            fn denoise_all(
+                &self,
+                mesh: &normalnet_mesh::Mesh,
+                progress: &dyn normalnet_mesh::Progress,
+            ) -> Result<normalnet_mesh::Mesh, $crate::FilterError> {
+                $denoise(mesh, self, progress)
+            }
+        }
+    };
+}
+pub(crate) use classical_method;
+
 /// Denoises `mesh` with `method`, robust to stray vertices (issue 14): the
 /// vertices that [`normalnet_mesh::outliers`] flags (far outside the mesh's
 /// robust extent, or isolated spikes) keep their positions, and the faces

@@ -143,12 +143,4 @@ pub fn sun07(
     ))
 }
 
-impl crate::ClassicalMethod for Sun07Params {
-    fn check(&self) -> Result<(), FilterError> {
-        self.validate()
-    }
-
-    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
-        sun07(mesh, self, progress)
-    }
-}
+crate::classical_method!(Sun07Params, sun07);

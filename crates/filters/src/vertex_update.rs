@@ -318,22 +318,9 @@ mod tests {
     use super::*;
     use normalnet_mesh::geometry::face_normals;
 
-    fn tetrahedron() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        )
-        .unwrap()
-    }
-
     #[test]
     fn own_normals_leave_mesh_unchanged() {
-        let m = tetrahedron();
+        let m = Mesh::tetrahedron();
         let t = Topology::new(m.num_vertices(), &m.faces);
         let out = vertex_update(&m, &t, &face_normals(&m), 5);
         for (a, b) in out.positions.iter().zip(&m.positions) {

@@ -278,15 +278,7 @@ pub fn vt(mesh: &Mesh, params: &VtParams, progress: &dyn Progress) -> Result<Mes
     ))
 }
 
-impl crate::ClassicalMethod for VtParams {
-    fn check(&self) -> Result<(), FilterError> {
-        self.validate()
-    }
-
-    fn denoise_all(&self, mesh: &Mesh, progress: &dyn Progress) -> Result<Mesh, FilterError> {
-        vt(mesh, self, progress)
-    }
-}
+crate::classical_method!(VtParams, vt);
 
 #[cfg(test)]
 mod tests {

@@ -21,21 +21,7 @@ fn noisy_sphere(rings: usize, segs: usize, noise: f64) -> Mesh {
 
 /// Flat `k × k` grid in the plane z = 0 (open boundary).
 fn plane(k: usize) -> Mesh {
-    let mut p = Vec::new();
-    for y in 0..=k {
-        for x in 0..=k {
-            p.push([x as f64, y as f64, 0.0]);
-        }
-    }
-    let id = |x: usize, y: usize| (y * (k + 1) + x) as u32;
-    let mut f = Vec::new();
-    for y in 0..k {
-        for x in 0..k {
-            f.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-            f.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-        }
-    }
-    Mesh::new(p, f).unwrap()
+    Mesh::height_grid(k, |_, _| 0.0)
 }
 
 /// Closed cube [0, k]³ with every side a `k × k` grid of split squares.

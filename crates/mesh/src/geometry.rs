@@ -190,22 +190,9 @@ pub fn mean_centre_distance(topology: &Topology, centres: &[Vec3]) -> f64 {
 mod tests {
     use super::*;
 
-    fn square() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-        .unwrap()
-    }
-
     #[test]
     fn square_quantities() {
-        let m = square();
+        let m = Mesh::unit_square();
         let t = Topology::new(4, &m.faces);
         let g = FaceGeometry::new(&m);
         assert_eq!(g.normals, vec![[0.0, 0.0, 1.0]; 2]);

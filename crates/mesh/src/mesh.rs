@@ -26,10 +26,19 @@ impl Mesh {
     /// # Panics
     /// If `k` is 0 or `z` gives a non-finite height.
     pub fn height_grid(k: usize, z: impl Fn(usize, usize) -> f64) -> Mesh {
+        Mesh::grid(k, |x, y| [x as f64, y as f64, z(x, y)])
+    }
+
+    /// The connectivity of [`Mesh::height_grid`] with vertex `(x, y)` at
+    /// `position(x, y)` (a jittered, bent or wrapped grid).
+    ///
+    /// # Panics
+    /// If `k` is 0 or `position` gives a non-finite coordinate.
+    pub fn grid(k: usize, position: impl Fn(usize, usize) -> Vec3) -> Mesh {
         let mut p = Vec::new();
         for y in 0..=k {
             for x in 0..=k {
-                p.push([x as f64, y as f64, z(x, y)]);
+                p.push(position(x, y));
             }
         }
         let id = |x: usize, y: usize| (y * (k + 1) + x) as u32;
@@ -40,7 +49,29 @@ impl Mesh {
                 f.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
             }
         }
-        Mesh::new(p, f).expect("a grid with finite heights is a valid mesh")
+        Mesh::new(p, f).expect("a grid with finite positions is a valid mesh")
+    }
+
+    /// The unit square in the z = 0 plane as two triangles (normal +z).
+    pub fn unit_square() -> Mesh {
+        let corners = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let positions = corners.map(|[x, y]| [x, y, 0.0]).to_vec();
+        Mesh::new(positions, vec![[0, 1, 2], [0, 2, 3]]).expect("the unit square is a valid mesh")
+    }
+
+    /// The closed tetrahedron on the origin and the three unit points
+    /// (faces outward): the smallest closed, oriented mesh.
+    pub fn tetrahedron() -> Mesh {
+        Mesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        )
+        .expect("the tetrahedron is a valid mesh")
     }
 
     /// A unit UV sphere: `rings` bands of latitude and `segs` of longitude,

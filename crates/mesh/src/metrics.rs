@@ -419,22 +419,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 mod tests {
     use super::*;
 
-    fn tetra() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        )
-        .unwrap()
-    }
-
     #[test]
     fn identical_meshes_have_zero_error() {
-        let m = tetra();
+        let m = Mesh::tetrahedron();
         let r = compare(&m, &m).unwrap();
         assert_eq!(r.e_a_deg, 0.0);
         assert_eq!(r.e_v, 0.0);
@@ -446,7 +433,7 @@ mod tests {
 
     #[test]
     fn translated_mesh_and_flipped_face() {
-        let m = tetra();
+        let m = Mesh::tetrahedron();
         // Shift every vertex by 0.1 along z: face normals unchanged, E_v > 0.
         let shifted = m.with_positions(
             m.positions
@@ -472,7 +459,7 @@ mod tests {
     /// angles and scaled distances, not 90° for every face.
     #[test]
     fn extreme_scales_give_the_unscaled_metrics_scaled() {
-        let m = tetra();
+        let m = Mesh::tetrahedron();
         let moved = m.with_positions(
             m.positions
                 .iter()
@@ -550,7 +537,7 @@ mod tests {
 
     #[test]
     fn degenerate_face_counts_ninety_degrees() {
-        let m = tetra();
+        let m = Mesh::tetrahedron();
         let mut p = m.positions.clone();
         p[3] = [0.5, 0.5, 0.0]; // faces 1, 2, 3 stay fine, but make 3 collapse:
         p[3] = [1.0, 0.0, 0.0]; // vertex 3 onto vertex 1: face [0,1,3] degenerate
@@ -563,7 +550,7 @@ mod tests {
 
     #[test]
     fn different_face_counts_are_refused() {
-        let m = tetra();
+        let m = Mesh::tetrahedron();
         let small = Mesh::new(m.positions.clone(), m.faces[..3].to_vec()).unwrap();
         let e = compare(&m, &small).unwrap_err().to_string();
         assert!(
@@ -575,7 +562,7 @@ mod tests {
 
     #[test]
     fn collapsed_result_and_degenerate_gt_give_numbers_or_errors_not_nan() {
-        let m = tetra();
+        let m = Mesh::tetrahedron();
         let collapsed = m.with_positions(vec![[0.0; 3]; 4]);
         let r = compare(&m, &collapsed).unwrap();
         assert!(r.e_v.is_finite() && r.e_v == 0.0, "{}", r.e_v); // (0,0,0) lies on the GT
@@ -587,7 +574,7 @@ mod tests {
 
     #[test]
     fn edge_length_matches_topology() {
-        let m = tetra();
+        let m = Mesh::tetrahedron();
         let t = crate::Topology::new(4, &m.faces);
         let a = unique_edge_mean_length(&m);
         let b = crate::geometry::mean_edge_length(&m, &t);

@@ -241,22 +241,9 @@ mod tests {
 
     /// A `k × k` grid in z = 0 with a gentle bump, unit spacing.
     fn grid(k: usize) -> Mesh {
-        let mut p = Vec::new();
-        for y in 0..=k {
-            for x in 0..=k {
-                let z = 0.1 * ((x as f64 * 0.7).sin() + (y as f64 * 0.5).cos());
-                p.push([x as f64, y as f64, z]);
-            }
-        }
-        let id = |x: usize, y: usize| (y * (k + 1) + x) as u32;
-        let mut f = Vec::new();
-        for y in 0..k {
-            for x in 0..k {
-                f.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
-                f.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
-            }
-        }
-        Mesh::new(p, f).unwrap()
+        Mesh::height_grid(k, |x, y| {
+            0.1 * ((x as f64 * 0.7).sin() + (y as f64 * 0.5).cos())
+        })
     }
 
     #[test]

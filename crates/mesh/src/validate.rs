@@ -307,16 +307,7 @@ mod tests {
 
     #[test]
     fn tetrahedron_is_clean_and_closed() {
-        let m = Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        )
-        .unwrap();
+        let m = Mesh::tetrahedron();
         let r = validate(&m);
         assert_eq!((r.vertices, r.faces, r.edges), (4, 4, 6));
         assert_eq!(r.euler_characteristic, 2);

@@ -7,26 +7,14 @@ use normalnet_mesh::noise::{NoiseParams, add_noise};
 use normalnet_mesh::{Mesh, Topology};
 
 fn wavy_grid(n: usize) -> Mesh {
-    let mut p = Vec::new();
-    for i in 0..=n {
-        for j in 0..=n {
-            let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
-            p.push([
-                x + 0.01 * (7.0 * y).sin(),
-                y,
-                0.1 * (5.0 * x).sin() * (3.0 * y).cos(),
-            ]);
-        }
-    }
-    let id = |i: usize, j: usize| (i * (n + 1) + j) as u32;
-    let mut f = Vec::new();
-    for i in 0..n {
-        for j in 0..n {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    Mesh::new(p, f).unwrap()
+    Mesh::grid(n, |i, j| {
+        let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+        [
+            x + 0.01 * (7.0 * y).sin(),
+            y,
+            0.1 * (5.0 * x).sin() * (3.0 * y).cos(),
+        ]
+    })
 }
 
 #[test]

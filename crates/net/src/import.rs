@@ -9,6 +9,7 @@ use std::collections::HashMap;
 
 use crate::export::ExportError;
 use crate::model::{ModelConfig, NormalNet};
+use crate::weights_file::{Layer, visit_layers};
 
 /// Sets every float tensor from a table keyed by module path.
 struct Setter {
@@ -81,22 +82,11 @@ fn put_linear(t: &mut HashMap<String, Vec<f32>>, prefix: &str, l: &LinearWeights
 /// `blocks.0.bn_a.running_var`, `fc.2.bias`, ...), in burn's layouts.
 pub fn tensors_by_path(w: &NetWeights) -> HashMap<String, Vec<f32>> {
     let mut t = HashMap::new();
-    put_conv(&mut t, "conv_in", &w.stem);
-    put_bn(&mut t, "bn_in", &w.stem_bn);
-    for (i, b) in w.blocks.iter().enumerate() {
-        let p = format!("blocks.{i}");
-        put_conv(&mut t, &format!("{p}.conv_a"), &b.conv_a);
-        put_bn(&mut t, &format!("{p}.bn_a"), &b.bn_a);
-        put_conv(&mut t, &format!("{p}.conv_b"), &b.conv_b);
-        put_bn(&mut t, &format!("{p}.bn_b"), &b.bn_b);
-        put_conv(&mut t, &format!("{p}.shortcut"), &b.shortcut);
-        put_bn(&mut t, &format!("{p}.bn_shortcut"), &b.bn_shortcut);
-    }
-    for (i, (l, bn)) in w.hidden.iter().enumerate() {
-        put_linear(&mut t, &format!("fc.{i}"), l);
-        put_bn(&mut t, &format!("bn_fc.{i}"), bn);
-    }
-    put_linear(&mut t, "out", &w.output);
+    visit_layers(w, ["conv_in", "bn_in"], |name, layer| match layer {
+        Layer::Conv(c) => put_conv(&mut t, name, c),
+        Layer::BatchNorm(bn) => put_bn(&mut t, name, bn),
+        Layer::Linear(l) => put_linear(&mut t, name, l),
+    });
     t
 }
 

@@ -34,23 +34,47 @@ pub const WEIGHTS_FORMAT: &str = "normalnet-weights-2";
 /// Flat arrays and PyTorch shapes of every tensor of `w`, by name.
 pub fn tensors_by_name(w: &NetWeights) -> BTreeMap<String, (Vec<usize>, Vec<f32>)> {
     let mut t = BTreeMap::new();
-    put_conv(&mut t, "stem.conv", &w.stem);
-    put_bn(&mut t, "stem.bn", &w.stem_bn);
+    visit_layers(w, ["stem.conv", "stem.bn"], |name, layer| match layer {
+        Layer::Conv(c) => put_conv(&mut t, name, c),
+        Layer::BatchNorm(bn) => put_bn(&mut t, name, bn),
+        Layer::Linear(l) => put_linear(&mut t, name, l),
+    });
+    t
+}
+
+/// One layer's weights, as [`visit_layers`] gives them.
+pub(crate) enum Layer<'a> {
+    /// a convolution
+    Conv(&'a ConvWeights),
+    /// a batch normalization
+    BatchNorm(&'a BatchNormWeights),
+    /// a dense layer
+    Linear(&'a LinearWeights),
+}
+
+/// Every layer of `w` in order with its module path: the stem's convolution
+/// and batch norm named `stem`, then `blocks.{i}.{conv_a, bn_a, conv_b, bn_b,
+/// shortcut, bn_shortcut}`, the head's `fc.{i}` and `bn_fc.{i}`, and `out`.
+pub(crate) fn visit_layers(w: &NetWeights, stem: [&str; 2], mut visit: impl FnMut(&str, Layer)) {
+    visit(stem[0], Layer::Conv(&w.stem));
+    visit(stem[1], Layer::BatchNorm(&w.stem_bn));
     for (i, b) in w.blocks.iter().enumerate() {
         let p = format!("blocks.{i}");
-        put_conv(&mut t, &format!("{p}.conv_a"), &b.conv_a);
-        put_bn(&mut t, &format!("{p}.bn_a"), &b.bn_a);
-        put_conv(&mut t, &format!("{p}.conv_b"), &b.conv_b);
-        put_bn(&mut t, &format!("{p}.bn_b"), &b.bn_b);
-        put_conv(&mut t, &format!("{p}.shortcut"), &b.shortcut);
-        put_bn(&mut t, &format!("{p}.bn_shortcut"), &b.bn_shortcut);
+        visit(&format!("{p}.conv_a"), Layer::Conv(&b.conv_a));
+        visit(&format!("{p}.bn_a"), Layer::BatchNorm(&b.bn_a));
+        visit(&format!("{p}.conv_b"), Layer::Conv(&b.conv_b));
+        visit(&format!("{p}.bn_b"), Layer::BatchNorm(&b.bn_b));
+        visit(&format!("{p}.shortcut"), Layer::Conv(&b.shortcut));
+        visit(
+            &format!("{p}.bn_shortcut"),
+            Layer::BatchNorm(&b.bn_shortcut),
+        );
     }
     for (i, (l, bn)) in w.hidden.iter().enumerate() {
-        put_linear(&mut t, &format!("fc.{i}"), l);
-        put_bn(&mut t, &format!("bn_fc.{i}"), bn);
+        visit(&format!("fc.{i}"), Layer::Linear(l));
+        visit(&format!("bn_fc.{i}"), Layer::BatchNorm(bn));
     }
-    put_linear(&mut t, "out", &w.output);
-    t
+    visit("out", Layer::Linear(&w.output));
 }
 
 type Table = BTreeMap<String, (Vec<usize>, Vec<f32>)>;

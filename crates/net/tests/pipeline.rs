@@ -6,28 +6,52 @@ use normalnet_mesh::NoProgress;
 use normalnet_net::training::{SourceSpec, TrainConfig, train};
 use normalnet_net::{Bundle, DenoiseParams, denoise};
 
-#[test]
-fn tiny_training_writes_a_bundle_that_denoises() {
-    let dir = tempfile::tempdir().unwrap();
-    let shape = |seed: u64, regen: bool| SourceSpec {
-        mesh: format!("shape:{seed}"),
-        gaussian: vec![0.4],
+/// A training source: `mesh` with Gaussian noise of `level`.
+fn source(mesh: &str, level: f64) -> SourceSpec {
+    SourceSpec {
+        mesh: mesh.into(),
+        gaussian: vec![level],
         impulsive: vec![],
         noise: vec![],
+        regen: false,
+    }
+}
+
+/// Procedural shape `seed` with Gaussian noise 0.4, its noisy copy drawn
+/// anew each epoch where `regen`.
+fn shape(seed: u64, regen: bool) -> SourceSpec {
+    SourceSpec {
         regen,
-    };
-    let config = TrainConfig {
+        ..source(&format!("shape:{seed}"), 0.4)
+    }
+}
+
+/// The `tiny` networks two steps each on two small shapes, validated on a
+/// third, one worker.
+fn tiny_config() -> TrainConfig {
+    TrainConfig {
         preset: "tiny".into(),
         batch: 8,
         lr: 1e-3,
-        steps: [4, 2, 2, 2, 2, 2],
+        steps: [2; 6],
         validate_every: 2,
-        validation_faces: 16,
-        shape_faces: 150,
+        validation_faces: 8,
+        shape_faces: 120,
         workers: 1,
         sources: vec![shape(1, true), shape(2, false)],
         validation: vec![shape(1001, false)],
         ..TrainConfig::default()
+    }
+}
+
+#[test]
+fn tiny_training_writes_a_bundle_that_denoises() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = TrainConfig {
+        steps: [4, 2, 2, 2, 2, 2],
+        validation_faces: 16,
+        shape_faces: 150,
+        ..tiny_config()
     };
     let manifest = train(&config, dir.path(), false, &NoProgress).unwrap();
     assert_eq!(manifest.networks.len(), 6);
@@ -65,27 +89,10 @@ fn tiny_training_writes_a_bundle_that_denoises() {
 #[test]
 fn a_run_stopped_between_networks_resumes() {
     let dir = tempfile::tempdir().unwrap();
-    let shape = |seed: u64, regen: bool| SourceSpec {
-        mesh: format!("shape:{seed}"),
-        gaussian: vec![0.4],
-        impulsive: vec![],
-        noise: vec![],
-        regen,
-    };
     let mut config = TrainConfig {
-        preset: "tiny".into(),
-        batch: 8,
-        lr: 1e-3,
         lr_warm: 3e-4,
-        steps: [2, 2, 2, 2, 2, 2],
-        validate_every: 2,
-        validation_faces: 8,
-        shape_faces: 120,
-        workers: 1,
         stop_after: 2,
-        sources: vec![shape(1, true), shape(2, false)],
-        validation: vec![shape(1001, false)],
-        ..TrainConfig::default()
+        ..tiny_config()
     };
     // the first two networks only: no bundle yet
     assert!(train(&config, dir.path(), false, &NoProgress).is_err());
@@ -111,45 +118,29 @@ fn a_run_stopped_between_networks_resumes() {
 }
 
 #[test]
-fn test_models_are_refused_as_training_sources() {
-    let config = TrainConfig {
-        sources: vec![SourceSpec {
-            mesh: "gd/Fandisk0.3/Original.obj".into(),
-            gaussian: vec![0.3],
-            impulsive: vec![],
-            noise: vec![],
-            regen: false,
-        }],
+fn configs_with_test_models_or_a_non_positive_voxel_scale_are_refused() {
+    let test_model = TrainConfig {
+        sources: vec![source("gd/Fandisk0.3/Original.obj", 0.3)],
         ..TrainConfig::default()
     };
-    let err = config.validate(std::path::Path::new("x.toml")).unwrap_err();
-    assert!(err.to_string().contains("Fandisk0.3"), "{err}");
+    let no_scale = TrainConfig {
+        voxel_scale: 0.0,
+        sources: vec![source("shape:1", 0.3)],
+        ..TrainConfig::default()
+    };
+    for (config, named) in [(test_model, "Fandisk0.3"), (no_scale, "voxel_scale")] {
+        let err = config.validate(std::path::Path::new("x.toml")).unwrap_err();
+        assert!(err.to_string().contains(named), "{err}");
+    }
 }
 
 #[test]
 fn a_run_continues_a_bundle_and_counts_its_samples() {
     let first = tempfile::tempdir().unwrap();
-    let shape = |seed: u64, regen: bool| SourceSpec {
-        mesh: format!("shape:{seed}"),
-        gaussian: vec![0.4],
-        impulsive: vec![],
-        noise: vec![],
-        regen,
-    };
     let config = TrainConfig {
-        preset: "tiny".into(),
-        batch: 8,
-        lr: 1e-3,
-        steps: [2, 2, 2, 2, 2, 2],
-        validate_every: 2,
-        validation_faces: 8,
-        shape_faces: 120,
-        workers: 1,
         residual_from: 3,
         voxel_scale: 1.5,
-        sources: vec![shape(1, true), shape(2, false)],
-        validation: vec![shape(1001, false)],
-        ..TrainConfig::default()
+        ..tiny_config()
     };
     let base = train(&config, first.path(), false, &NoProgress).unwrap();
     // κ is recorded as the grid's α_c
@@ -249,23 +240,6 @@ fn a_run_continues_a_bundle_and_counts_its_samples() {
         assert!(out.positions.iter().flatten().all(|x| x.is_finite()));
         assert_ne!(out.positions, mesh.positions);
     }
-}
-
-#[test]
-fn a_non_positive_voxel_scale_is_refused() {
-    let config = TrainConfig {
-        voxel_scale: 0.0,
-        sources: vec![SourceSpec {
-            mesh: "shape:1".into(),
-            gaussian: vec![0.3],
-            impulsive: vec![],
-            noise: vec![],
-            regen: false,
-        }],
-        ..TrainConfig::default()
-    };
-    let err = config.validate(std::path::Path::new("x.toml")).unwrap_err();
-    assert!(err.to_string().contains("voxel_scale"), "{err}");
 }
 
 #[test]

@@ -7,7 +7,7 @@
 //! measures how yaw-invariant the trained network actually is.
 
 use normalnet_mesh::vec3::{self, Vec3};
-use normalnet_mesh::{NoProgress, NoiseParams, Topology, add_noise};
+use normalnet_mesh::{NoProgress, Topology};
 use normalnet_net::Bundle;
 use normalnet_net::pipeline::filtered_normals;
 use normalnet_voxel::frame::{Mat3, mat_vec};
@@ -32,16 +32,7 @@ fn trained_network_is_nearly_rotation_equivariant() {
         return;
     }
     let bundle = Bundle::load(&path).unwrap();
-    let clean = normalnet_voxel::shapes::generate_seeded(21, 600).unwrap();
-    let noisy = add_noise(
-        &clean,
-        &NoiseParams {
-            level: 0.3,
-            seed: 5,
-            ..NoiseParams::default()
-        },
-    )
-    .unwrap();
+    let (_, noisy) = normalnet_voxel::shapes::noisy_pair(21, 600, 0.3, 5).unwrap();
     let r = rotation([0.2, 0.9, -0.4], 2.0);
     let rotated = noisy.with_positions(noisy.positions.iter().map(|p| mat_vec(&r, *p)).collect());
     let topology = Topology::new(noisy.num_vertices(), &noisy.faces);

@@ -604,19 +604,6 @@ fn smooth_colour(base: [u8; 3], light: Vec3, n: [Vec3; 3], l: [f64; 3], ambient:
 mod tests {
     use super::*;
 
-    fn square() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-        .unwrap()
-    }
-
     fn covered(img: &Image, bg: [u8; 3]) -> usize {
         img.pixels().chunks(3).filter(|p| p != &bg).count()
     }
@@ -633,7 +620,7 @@ mod tests {
             background: bg,
             ..Default::default()
         };
-        let img = render(&square(), &opts).unwrap();
+        let img = render(&Mesh::unit_square(), &opts).unwrap();
         // the square spans pixels 10..90 in both directions: 80 × 80
         assert_eq!(covered(&img, bg), 6400);
         assert_eq!(img.get(10, 10), Some(opts.base_color)); // full headlight, facing
@@ -654,7 +641,7 @@ mod tests {
             background: bg,
             ..Default::default()
         };
-        let img = render(&square(), &opts).unwrap();
+        let img = render(&Mesh::unit_square(), &opts).unwrap();
         assert_eq!(covered(&img, bg), 2500);
     }
 
@@ -726,7 +713,7 @@ mod tests {
 
     #[test]
     fn bad_options_are_errors_naming_the_option() {
-        let m = square();
+        let m = Mesh::unit_square();
         let e = render(
             &m,
             &RenderOptions {
@@ -758,7 +745,7 @@ mod tests {
 
     #[test]
     fn result_does_not_depend_on_thread_count() {
-        let m = square();
+        let m = Mesh::unit_square();
         let opts = RenderOptions {
             supersample: 2,
             shading: Shading::Smooth,

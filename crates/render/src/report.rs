@@ -314,6 +314,22 @@ fn md_escape(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
 }
 
+/// `<h2>title</h2>` and a list with one `model / method: text` line per
+/// record, `text(record)` being HTML already.
+fn write_run_list<'r>(
+    s: &mut String,
+    title: &str,
+    records: impl Iterator<Item = &'r RunRecord>,
+    text: impl Fn(&RunRecord) -> String,
+) {
+    let _ = writeln!(s, "<h2>{title}</h2><ul>");
+    for r in records {
+        let (model, method) = (html_escape(&r.model), html_escape(&r.method));
+        let _ = writeln!(s, "<li>{model} / {method}: {}</li>", text(r));
+    }
+    let _ = writeln!(s, "</ul>");
+}
+
 fn html_escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -626,43 +642,19 @@ pub fn index_html(report: &BenchReport) -> String {
     let _ = writeln!(s, "</table>");
     let failures = report.failures();
     if !failures.is_empty() {
-        let _ = writeln!(s, "<h2>Failed runs</h2><ul>");
-        for r in failures {
-            let _ = writeln!(
-                s,
-                "<li>{} / {}: <span class=\"fail\">{}</span></li>",
-                html_escape(&r.model),
-                html_escape(&r.method),
-                html_escape(r.error.as_deref().unwrap_or(""))
-            );
-        }
-        let _ = writeln!(s, "</ul>");
+        let failed = |r: &RunRecord| {
+            let error = html_escape(r.error.as_deref().unwrap_or(""));
+            format!("<span class=\"fail\">{error}</span>")
+        };
+        write_run_list(&mut s, "Failed runs", failures.into_iter(), failed);
     }
     let skips = report.skips();
     if !skips.is_empty() {
-        let _ = writeln!(s, "<h2>Skipped runs</h2><ul>");
-        for r in skips {
-            let _ = writeln!(
-                s,
-                "<li>{} / {}: {}</li>",
-                html_escape(&r.model),
-                html_escape(&r.method),
-                html_escape(r.skipped.as_deref().unwrap_or(""))
-            );
-        }
-        let _ = writeln!(s, "</ul>");
+        let skipped = |r: &RunRecord| html_escape(r.skipped.as_deref().unwrap_or(""));
+        write_run_list(&mut s, "Skipped runs", skips.into_iter(), skipped);
     }
-    let _ = writeln!(s, "<h2>Settings</h2><ul>");
-    for r in report.records.iter().filter(|r| r.method != NOISY) {
-        let _ = writeln!(
-            s,
-            "<li>{} / {}: {}</li>",
-            html_escape(&r.model),
-            html_escape(&r.method),
-            html_escape(&r.params)
-        );
-    }
-    let _ = writeln!(s, "</ul>");
+    let runs = report.records.iter().filter(|r| r.method != NOISY);
+    write_run_list(&mut s, "Settings", runs, |r| html_escape(&r.params));
     if !report.pictures.is_empty() {
         let _ = writeln!(
             s,

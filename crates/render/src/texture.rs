@@ -285,16 +285,6 @@ mod tests {
         assert_eq!(t.sample(1, [0.5, 0.25]), [0, 0, 0]);
     }
 
-    fn square() -> Mesh {
-        let p = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
-        Mesh::new(p, vec![[0, 1, 2], [0, 2, 3]]).unwrap()
-    }
-
     #[test]
     fn a_textured_square_shows_its_texture_in_place_on_both_shadings() {
         let (u0, u1) = ([0.0, 0.0], [1.0, 0.0]);
@@ -323,7 +313,7 @@ mod tests {
                 texture: Some(texture.clone()),
                 ..Default::default()
             };
-            let img = render(&square(), &opts).unwrap();
+            let img = render(&Mesh::unit_square(), &opts).unwrap();
             // facing the headlight: diffuse 1 (flat: the texel itself)
             let left = img.get(20, 50).unwrap();
             let right = img.get(80, 50).unwrap();
@@ -347,7 +337,7 @@ mod tests {
             }),
             ..Default::default()
         };
-        let e = render(&square(), &opts).unwrap_err().to_string();
+        let e = render(&Mesh::unit_square(), &opts).unwrap_err().to_string();
         assert!(e.contains("texture") && e.contains("1 faces"), "{e}");
     }
 

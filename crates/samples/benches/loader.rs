@@ -4,26 +4,16 @@
 #![allow(missing_docs)] // criterion's generated functions
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use normalnet_mesh::noise::{NoiseParams, add_noise};
 use normalnet_samples::{BalancedSampler, Loader, LoaderConfig, MU_GS, SampleSource};
 use normalnet_voxel::VoxelParams;
-use normalnet_voxel::shapes::generate_seeded;
 use std::hint::black_box;
 use std::sync::Arc;
 
 fn loader(c: &mut Criterion) {
     let sources: Vec<SampleSource> = (0..3u64)
         .map(|seed| {
-            let clean = generate_seeded(seed * 3 + 1, 4000).unwrap();
-            let noisy = add_noise(
-                &clean,
-                &NoiseParams {
-                    level: 0.3,
-                    seed,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+            let (clean, noisy) =
+                normalnet_voxel::shapes::noisy_pair(seed * 3 + 1, 4000, 0.3, seed).unwrap();
             SampleSource::new(noisy, &clean, VoxelParams::lite(), &MU_GS).unwrap()
         })
         .collect();

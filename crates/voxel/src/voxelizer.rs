@@ -505,22 +505,10 @@ mod tests {
 
     /// A flat n×n grid of squares in the plane z = 0 (two triangles each).
     pub(crate) fn flat_patch(n: usize, jitter: f64) -> Mesh {
-        let mut positions = Vec::new();
-        for i in 0..=n {
-            for j in 0..=n {
-                let d = if (i + j) % 2 == 0 { jitter } else { -jitter };
-                positions.push([i as f64 + d, j as f64 - 0.5 * d, 0.0]);
-            }
-        }
-        let id = |i: usize, j: usize| (i * (n + 1) + j) as u32;
-        let mut faces = Vec::new();
-        for i in 0..n {
-            for j in 0..n {
-                faces.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                faces.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        Mesh::new(positions, faces).unwrap()
+        Mesh::grid(n, |i, j| {
+            let d = if (i + j) % 2 == 0 { jitter } else { -jitter };
+            [i as f64 + d, j as f64 - 0.5 * d, 0.0]
+        })
     }
 
     #[test]

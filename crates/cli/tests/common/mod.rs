@@ -3,7 +3,8 @@
 
 use normalnet_mesh::Mesh;
 use std::path::Path;
-use std::process::{Child, Command, ExitStatus, Output};
+use std::path::PathBuf;
+use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::time::{Duration, Instant};
 
 /// `normalnet ARGS…` with the built-in model (`NORMALNET_MODEL` unset).
@@ -47,6 +48,23 @@ pub fn bumpy_sphere(rings: usize, segs: usize, bump: f64) -> Mesh {
 /// A slightly bumpy sphere (big enough for a slow denoise at 60 × 120).
 pub fn sphere(rings: usize, segs: usize) -> Mesh {
     bumpy_sphere(rings, segs, 0.02)
+}
+
+/// A GNF denoise of a 60 × 120 sphere written into `dir` with 100,000
+/// iterations (minutes: long enough to be interrupted), stderr piped; the
+/// child and the output path it would write.
+pub fn spawn_long_denoise(dir: &Path) -> (Child, PathBuf) {
+    let input = dir.join("in.obj");
+    normalnet_mesh::write_mesh(&input, &sphere(60, 120)).unwrap();
+    let out = dir.join("out.obj");
+    let child = Command::new(env!("CARGO_BIN_EXE_normalnet"))
+        .args(["denoise", "-q", "-m", "gnf", "--iterations", "100000"])
+        .arg(&input)
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    (child, out)
 }
 
 /// Sends SIGINT to `child` and waits up to 30 s for it to exit; panics

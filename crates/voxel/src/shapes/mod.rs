@@ -135,6 +135,29 @@ pub fn generate_seeded(seed: u64, target_faces: usize) -> Result<Mesh, VoxelErro
     generate(ShapeKind::from_seed(seed), seed, target_faces)
 }
 
+/// A seeded shape ([`generate_seeded`]) and its copy with the default
+/// Gaussian noise ([`normalnet_mesh::NoiseParams`]) of `level` × the mean
+/// edge length, drawn with `noise_seed`: `(clean, noisy)`, the pair a test
+/// or benchmark of a denoiser starts from.
+///
+/// # Errors
+/// As [`generate`], and [`VoxelError::Mesh`] for a noise level out of range.
+pub fn noisy_pair(
+    seed: u64,
+    target_faces: usize,
+    level: f64,
+    noise_seed: u64,
+) -> Result<(Mesh, Mesh), VoxelError> {
+    let clean = generate_seeded(seed, target_faces)?;
+    let noise = normalnet_mesh::NoiseParams {
+        level,
+        seed: noise_seed,
+        ..normalnet_mesh::NoiseParams::default()
+    };
+    let noisy = normalnet_mesh::add_noise(&clean, &noise)?;
+    Ok((clean, noisy))
+}
+
 /// Generates a shape of `kind` with about `target_faces` faces (100 to
 /// 2,000,000), deterministic for `seed`.
 ///

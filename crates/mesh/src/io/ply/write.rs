@@ -100,10 +100,18 @@ impl Values {
             Scalar::U16 => int!(u16),
             Scalar::I32 => int!(i32),
             Scalar::U32 => int!(u32),
-            // ASCII keeps what an f32 would round (a `float` column written
-            // with more digits reads back as written, as rply reads it)
-            Scalar::F32 if self.encoding == PlyEncoding::Ascii && v as f32 as f64 != v => {
-                float!(f64)
+            // ASCII writes the shortest digits that read back as `v` (the
+            // reader keeps every digit of a `float` column, as rply does):
+            // an f32's where they do, else a double's (a computed value, or
+            // an f32 such as 55555552 whose short digits 55555550 read as
+            // another double)
+            Scalar::F32 if self.encoding == PlyEncoding::Ascii => {
+                let short = (v as f32).to_string();
+                if v as f32 as f64 == v && short.parse::<f64>() == Ok(v) {
+                    self.text(format_args!("{short}"));
+                } else {
+                    self.text(format_args!("{v}"));
+                }
             }
             Scalar::F32 => float!(f32),
             Scalar::F64 => float!(f64),
