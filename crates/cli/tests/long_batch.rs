@@ -96,16 +96,10 @@ fn count_outputs(dir: &Path) -> usize {
     })
 }
 
-#[test]
-#[ignore = "long: 2,000 files, about a minute"]
-fn issue_39_a_batch_of_2000_files_with_2_percent_broken() {
-    let dir = tempfile::tempdir().unwrap();
-    // LONG_BATCH_INPUTS=DIR keeps the inputs there, e.g. for the Python
-    // run of the same files (docs/robustness.md)
-    let inputs =
-        std::env::var_os("LONG_BATCH_INPUTS").map_or_else(|| dir.path().join("in"), PathBuf::from);
-    std::fs::create_dir_all(&inputs).unwrap();
-    let kinds = broken_kinds();
+/// The batch's [`FILES`] inputs written into `inputs`: small spheres in
+/// the four formats, every [`BROKEN_EVERY`]th file one of the broken
+/// `kinds` in turn. The names of the good files and of the broken ones.
+fn write_inputs(inputs: &Path, kinds: &[(&str, Vec<u8>)]) -> (Vec<String>, Vec<String>) {
     let formats = ["obj", "off", "ply", "stl"];
     let mut good = Vec::new();
     let mut bad = Vec::new();
@@ -122,6 +116,20 @@ fn issue_39_a_batch_of_2000_files_with_2_percent_broken() {
             good.push(name);
         }
     }
+    (good, bad)
+}
+
+#[test]
+#[ignore = "long: 2,000 files, about a minute"]
+fn issue_39_a_batch_of_2000_files_with_2_percent_broken() {
+    let dir = tempfile::tempdir().unwrap();
+    // LONG_BATCH_INPUTS=DIR keeps the inputs there, e.g. for the Python
+    // run of the same files (docs/robustness.md)
+    let inputs =
+        std::env::var_os("LONG_BATCH_INPUTS").map_or_else(|| dir.path().join("in"), PathBuf::from);
+    std::fs::create_dir_all(&inputs).unwrap();
+    let kinds = broken_kinds();
+    let (good, bad) = write_inputs(&inputs, &kinds);
     assert_eq!(bad.len(), FILES / BROKEN_EVERY);
     assert!(bad.len() >= kinds.len(), "every kind at least once");
 

@@ -1,6 +1,6 @@
 //! End-to-end: `normalnet shapes`, `normalnet voxelize`, `normalnet dataset`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn normalnet(args: &[&str]) -> std::process::Output {
@@ -17,32 +17,36 @@ fn npy_header(path: &Path) -> String {
     String::from_utf8(bytes[10..10 + len].to_vec()).unwrap()
 }
 
-#[test]
-fn shapes_voxelize_dataset_round_trip() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let shapes = d.join("shapes");
-    let out = normalnet(&[
-        "shapes",
-        shapes.to_str().unwrap(),
-        "--count",
-        "2",
-        "--seed",
-        "4",
-        "--faces",
-        "800",
-        "-q",
-    ]);
+/// `normalnet ARGS…`, which must succeed (the failure shows its stderr).
+fn succeeds(args: &[&str]) {
+    let out = normalnet(args);
     assert!(
         out.status.success(),
-        "{}",
+        "{args:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// `normalnet shapes` of two shapes of about 800 faces into `dir/shapes`:
+/// their files, sorted.
+fn two_shapes(dir: &Path) -> Vec<PathBuf> {
+    let shapes = dir.join("shapes");
+    let out = shapes.to_str().unwrap();
+    succeeds(&[
+        "shapes", out, "--count", "2", "--seed", "4", "--faces", "800", "-q",
+    ]);
     let mut files: Vec<_> = std::fs::read_dir(&shapes)
         .unwrap()
         .map(|e| e.unwrap().path())
         .collect();
     files.sort();
+    files
+}
+
+#[test]
+fn shapes_writes_the_asked_count_and_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_shapes(dir.path());
     assert_eq!(files.len(), 2);
     let mesh = normalnet_mesh::io::read_mesh(&files[0]).unwrap();
     assert!(
@@ -50,69 +54,56 @@ fn shapes_voxelize_dataset_round_trip() {
         "{}",
         mesh.num_faces()
     );
+}
 
+#[test]
+fn voxelize_writes_a_grid_or_a_picture_and_names_bad_faces_and_presets() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let files = two_shapes(d);
+    let shape = files[0].to_str().unwrap();
     let npy = d.join("g.npy");
-    let out = normalnet(&[
-        "voxelize",
-        files[0].to_str().unwrap(),
-        "--face",
-        "5",
-        "--preset",
-        "tiny",
-        "--out",
-        npy.to_str().unwrap(),
-        "-q",
+    let npy_out = npy.to_str().unwrap();
+    succeeds(&[
+        "voxelize", shape, "--face", "5", "--preset", "tiny", "--out", npy_out, "-q",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(npy_header(&npy).contains("'shape': (3, 15, 15, 15)"));
     assert_eq!(
         std::fs::metadata(&npy).unwrap().len() as usize,
         128 + 4 * 3 * 15 * 15 * 15
     );
     let png = d.join("g.png");
-    let out = normalnet(&[
+    succeeds(&[
         "voxelize",
-        files[0].to_str().unwrap(),
+        shape,
         "--face",
         "5",
         "--out",
         png.to_str().unwrap(),
         "-q",
     ]);
-    assert!(out.status.success());
     assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
 
-    let bad = normalnet(&[
-        "voxelize",
-        files[0].to_str().unwrap(),
-        "--face",
-        "999999",
-        "--out",
-        npy.to_str().unwrap(),
-    ]);
+    let bad = normalnet(&["voxelize", shape, "--face", "999999", "--out", npy_out]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("face 999999 out of range"));
     let bad = normalnet(&[
-        "voxelize",
-        files[0].to_str().unwrap(),
-        "--face",
-        "1",
-        "--preset",
-        "huge",
-        "--out",
-        npy.to_str().unwrap(),
+        "voxelize", shape, "--face", "1", "--preset", "huge", "--out", npy_out,
     ]);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("preset"));
+}
 
+#[test]
+fn dataset_writes_balanced_categories() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let files = two_shapes(d);
     let ds = d.join("ds");
-    let out = normalnet(&[
+    let (a, b) = (files[0].to_str().unwrap(), files[1].to_str().unwrap());
+    succeeds(&[
         "dataset",
-        files[0].to_str().unwrap(),
-        files[1].to_str().unwrap(),
+        a,
+        b,
         "--out",
         ds.to_str().unwrap(),
         "--count",
@@ -126,11 +117,6 @@ fn shapes_voxelize_dataset_round_trip() {
         "1",
         "-q",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(npy_header(&ds.join("grids.npy")).contains("'shape': (40, 3, 15, 15, 15)"));
     assert!(npy_header(&ds.join("targets.npy")).contains("'shape': (40, 6, 3)"));
     assert!(npy_header(&ds.join("categories.npy")).contains("'shape': (40,)"));

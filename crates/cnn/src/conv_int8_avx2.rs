@@ -177,11 +177,59 @@ fn widen(bytes: &[u8], wide: &mut Vec<i16>) {
     }
 }
 
+/// The inner step of a tile: how the input is held (`Input`: i16 widened
+/// bytes, two channels per 32-bit group, or the bytes, four) and the
+/// instruction that adds a group's products to the i32 lanes. Both weight
+/// layouts hold one group of an output channel in four bytes, so one tile
+/// body ([`tile_sums_of`]) serves both; it is inlined into a function per
+/// instruction set (`tile_sums`, `tile_sums_vnni`), so no VNNI instruction
+/// can reach the plain AVX2 path.
+trait GroupMac {
+    /// the input element
+    type Input: Copy;
+    /// The weights of taps `taps` as bytes (`[tap][group][co][4 bytes]`).
+    fn weight_bytes(c: &Int8Conv, taps: std::ops::Range<usize>) -> *const u8;
+    /// `acc` + the products of the input group `x` (broadcast) and the
+    /// weight groups `w`, summed per i32 lane.
+    ///
+    /// # Safety
+    /// The CPU has this step's instructions.
+    unsafe fn mac(acc: __m256i, x: __m256i, w: __m256i) -> __m256i;
+}
+
+/// Plain AVX2: i16 pairs, `vpmaddwd` and `vpaddd`.
+struct Madd;
+
+impl GroupMac for Madd {
+    type Input = i16;
+    fn weight_bytes(c: &Int8Conv, taps: std::ops::Range<usize>) -> *const u8 {
+        c.tap_weights16(taps).as_ptr().cast()
+    }
+    #[inline(always)]
+    unsafe fn mac(acc: __m256i, x: __m256i, w: __m256i) -> __m256i {
+        // SAFETY: the caller's CPU has AVX2.
+        unsafe { _mm256_add_epi32(acc, _mm256_madd_epi16(x, w)) }
+    }
+}
+
+/// AVX-VNNI: byte quadruples, `vpdpbusd`.
+struct Dpbusd;
+
+impl GroupMac for Dpbusd {
+    type Input = u8;
+    fn weight_bytes(c: &Int8Conv, taps: std::ops::Range<usize>) -> *const u8 {
+        c.tap_weights8(taps).as_ptr().cast()
+    }
+    #[inline(always)]
+    unsafe fn mac(acc: __m256i, x: __m256i, w: __m256i) -> __m256i {
+        // SAFETY: the caller's CPU has AVX-VNNI.
+        unsafe { _mm256_dpbusd_avx_epi32(acc, x, w) }
+    }
+}
+
 /// The i32 sums of the `T` output cubes `ow .. ow + T` of output row (`od`,
-/// `oh`), output channels `cb .. cb + 16`, into `sums[..T]`: for every tap
-/// and input channel pair, two weight loads feed `2·T` `vpmaddwd` (one
-/// input pair broadcast per cube). The input's W rows are padded, so every
-/// W tap is in range; D and H taps out of range are skipped.
+/// `oh`), output channels `cb .. cb + 16`, into `sums[..T]` (`vpmaddwd` on
+/// the i16 widened input).
 ///
 /// # Safety
 /// The CPU has AVX2.
@@ -190,53 +238,14 @@ unsafe fn tile_sums<const T: usize>(
     c: &Int8Conv,
     wide: &[i16],
     n: usize,
-    [od, oh, ow, cb]: [usize; 4],
+    at: [usize; 4],
     sums: &mut [[__m256i; V]; MAX_TILE],
 ) {
-    let [k, s, p, cin, co, layout_pad] = c.shape();
-    let pairs = cin / 2;
-    let padded = (n + 2 * layout_pad) * cin;
-    assert!(cb + BLOCK <= co);
-    let mut acc = [[_mm256_setzero_si256(); V]; T];
-    for kd in taps(od, s, p, k, n) {
-        let id = od * s + kd - p;
-        for kh in taps(oh, s, p, k, n) {
-            let ih = oh * s + kh - p;
-            // position in the padded W row of output cube ow's tap kw
-            let start = (id * n + ih) * padded + (ow * s + layout_pad - p) * cin;
-            let x = &wide[start..start + ((T - 1) * s + k) * cin];
-            let first = (kd * k + kh) * k;
-            let wt = c.tap_weights16(first..first + k);
-            // SAFETY (all reads): kw < k, g < pairs, t < T, v < V: input
-            // values (t·s + kw)·cin + 2g + 2 ≤ ((T − 1)·s + k)·cin, weight
-            // values ((kw·pairs + g)·co + cb + 8v)·2 + 16 ≤ k·cin·co.
-            unsafe {
-                for kw in 0..k {
-                    for g in 0..pairs {
-                        let wg = wt.as_ptr().add(((kw * pairs + g) * co + cb) * 2);
-                        let wv: [__m256i; V] =
-                            std::array::from_fn(|v| _mm256_loadu_si256(wg.add(16 * v).cast()));
-                        let xg = x.as_ptr().add(kw * cin + 2 * g);
-                        for (t, a) in acc.iter_mut().enumerate() {
-                            let xv = _mm256_set1_epi32(
-                                xg.add(t * s * cin).cast::<i32>().read_unaligned(),
-                            );
-                            for (a, &w) in a.iter_mut().zip(&wv) {
-                                *a = _mm256_add_epi32(*a, _mm256_madd_epi16(xv, w));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-    sums[..T].copy_from_slice(&acc);
+    // SAFETY: the CPU has AVX2.
+    unsafe { tile_sums_of::<Madd, T>(c, wide, n, at, sums) }
 }
 
-/// As [`tile_sums`], from the bytes themselves: for every tap and group of
-/// four input channels, two weight loads (the VNNI layout: four bytes per
-/// output channel) feed `2·T` `vpdpbusd` (one input group broadcast per
-/// cube).
+/// As [`tile_sums`] with `vpdpbusd` on the bytes themselves.
 ///
 /// # Safety
 /// The CPU has AVX2 and AVX-VNNI.
@@ -245,14 +254,36 @@ unsafe fn tile_sums_vnni<const T: usize>(
     c: &Int8Conv,
     input: &[u8],
     n: usize,
+    at: [usize; 4],
+    sums: &mut [[__m256i; V]; MAX_TILE],
+) {
+    // SAFETY: the CPU has AVX2 and AVX-VNNI.
+    unsafe { tile_sums_of::<Dpbusd, T>(c, input, n, at, sums) }
+}
+
+/// The body of [`tile_sums`] and [`tile_sums_vnni`]: for every tap and
+/// input group (4 bytes: two i16 or four u8 channels), two weight loads
+/// feed `2·T` multiply-adds (one input group broadcast per cube). The
+/// input's W rows are padded, so every W tap is in range; D and H taps out
+/// of range are skipped.
+///
+/// # Safety
+/// The CPU runs `M::mac` (and has AVX2).
+#[inline(always)]
+unsafe fn tile_sums_of<M: GroupMac, const T: usize>(
+    c: &Int8Conv,
+    input: &[M::Input],
+    n: usize,
     [od, oh, ow, cb]: [usize; 4],
     sums: &mut [[__m256i; V]; MAX_TILE],
 ) {
     let [k, s, p, cin, co, layout_pad] = c.shape();
-    let groups = cin / 4;
+    let per_group = 4 / std::mem::size_of::<M::Input>();
+    let groups = cin / per_group;
     let padded = (n + 2 * layout_pad) * cin;
     assert!(cb + BLOCK <= co);
-    let mut acc = [[_mm256_setzero_si256(); V]; T];
+    // SAFETY: the CPU has AVX2.
+    let mut acc = [[unsafe { _mm256_setzero_si256() }; V]; T];
     for kd in taps(od, s, p, k, n) {
         let id = od * s + kd - p;
         for kh in taps(oh, s, p, k, n) {
@@ -261,23 +292,25 @@ unsafe fn tile_sums_vnni<const T: usize>(
             let start = (id * n + ih) * padded + (ow * s + layout_pad - p) * cin;
             let x = &input[start..start + ((T - 1) * s + k) * cin];
             let first = (kd * k + kh) * k;
-            let wt = c.tap_weights8(first..first + k);
+            let wt = M::weight_bytes(c, first..first + k);
             // SAFETY (all reads): kw < k, g < groups, t < T, v < V: input
-            // bytes (t·s + kw)·cin + 4g + 4 ≤ ((T − 1)·s + k)·cin, weight
-            // bytes ((kw·groups + g)·co + cb + 8v)·4 + 32 ≤ k·cin·co.
+            // elements (t·s + kw)·cin + per_group·(g + 1) ≤ ((T − 1)·s +
+            // k)·cin, weight bytes ((kw·groups + g)·co + cb + 8v)·4 + 32 ≤
+            // k·cin·co·(4 / per_group) (the taps' weights); the caller's
+            // CPU runs `M::mac`.
             unsafe {
                 for kw in 0..k {
                     for g in 0..groups {
-                        let wg = wt.as_ptr().add(((kw * groups + g) * co + cb) * 4);
+                        let wg = wt.add(((kw * groups + g) * co + cb) * 4);
                         let wv: [__m256i; V] =
                             std::array::from_fn(|v| _mm256_loadu_si256(wg.add(32 * v).cast()));
-                        let xg = x.as_ptr().add(kw * cin + 4 * g);
+                        let xg = x.as_ptr().add(kw * cin + per_group * g);
                         for (t, a) in acc.iter_mut().enumerate() {
                             let xv = _mm256_set1_epi32(
                                 xg.add(t * s * cin).cast::<i32>().read_unaligned(),
                             );
                             for (a, &w) in a.iter_mut().zip(&wv) {
-                                *a = _mm256_dpbusd_avx_epi32(*a, xv, w);
+                                *a = M::mac(*a, xv, w);
                             }
                         }
                     }
