@@ -282,15 +282,18 @@ def write_mesh(
     written with everything ``src`` carries (polygons, texture coordinates,
     materials, groups, colours, PLY properties, ...; normals recomputed),
     like :func:`denoise_file` does, and with the edits of the dict's values:
-    ``uv`` (OBJ), ``vertex_colors``, and the arrays of ``vertex_properties`` /
+    ``uv`` (OBJ and glTF), ``colors`` (glTF: stored in the accessor's
+    component type, f32 or the nearest step of a normalized integer, the
+    accessor's ``min`` / ``max`` updated), ``vertex_colors``, and the arrays
+    of ``vertex_properties`` /
     ``face_properties`` (PLY integer properties take the value rounded; a
     value outside the property's type is a ``ValueError``). Only the values
     that differ from the file's are rewritten (an OBJ / OFF vertex whose
     colour is unchanged keeps its text as read); ``vertex_colors`` is
     applied after ``vertex_properties`` (PLY colours are in both). A changed
     shape, a changed ``format`` / ``encoding`` / ``polygon_sizes`` /
-    ``corner_uv`` (and, glTF, ``uv`` / ``colors`` / ``corner_colors``: read-only
-    there), an added key or property, other faces, or a dict not from
+    ``corner_uv`` / ``corner_colors``, a glTF colour column the accessor
+    lacks (alpha of RGB), an added key or property, other faces, or a dict not from
     :func:`read_mesh` is a ``ValueError`` naming the key; a key removed from
     the dict is written as read. What the output lacks is a
     :class:`UserWarning` (as in :func:`denoise_file`): the reader's

@@ -29,9 +29,10 @@
 //!
 //! Writing compares each editable array with the one [`FileAttributes`]
 //! gives and changes only what differs (text tails of unchanged vertices
-//! stay byte for byte as read); read-only entries must be unchanged. The
-//! glTF entries are read-only (the writer passes the accessors through as
-//! read).
+//! stay byte for byte as read); read-only entries must be unchanged. glTF
+//! `uv` and `colors` edits go into their accessors (in their component
+//! types: f32, or the nearest step of a normalized integer); `corner_uv`
+//! and `corner_colors` are read-only (the connectivity of the file).
 
 use normalnet_mesh::Attributes;
 use normalnet_mesh::MeshError;
@@ -472,18 +473,39 @@ fn check_unchanged_ints(
     Ok(())
 }
 
-/// A float64 array that must equal `original` (a read-only entry; NaN
-/// equals NaN).
-fn check_unchanged_floats(value: &Bound<'_, PyAny>, key: &str, original: &Table) -> PyResult<()> {
-    let new = table_edit(value, key, &[original.rows(), original.cols])?;
-    if let Some(i) = (0..new.len()).find(|&i| !same(new[i], original.data[i])) {
-        return Err(value_error(format!(
-            "{key}: row {} differs from the file's: glTF {key} cannot be edited (the accessors \
-             are written back as read); pass it as read_mesh returned it",
-            i / original.cols
-        )));
+/// glTF: the edits of the `key` table (`uv`, `colors`, made from the
+/// accessors of `attribute` with `fill` in the columns an element lacks)
+/// written into those accessors ([`GltfAttributes::set_corner_values`]);
+/// a filled column must stay filled (an RGB accessor has no alpha).
+fn apply_gltf_values(
+    gltf: &mut GltfAttributes,
+    (key, attribute, fill): (&str, &str, f64),
+    table: &Table,
+    value: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    let new = table_edit(value, key, &[table.rows(), table.cols])?;
+    if (0..new.len()).all(|i| same(new[i], table.data[i])) {
+        return Ok(());
     }
-    Ok(())
+    let mut values = gltf
+        .corner_values(attribute)
+        .map_err(|e| value_error(format!("{key}: {e}")))?
+        .map(|found| found.values)
+        .unwrap_or_default();
+    for (i, element) in values.iter_mut().enumerate() {
+        let row = &new[i * table.cols..(i + 1) * table.cols];
+        if let Some(k) = (element.len()..table.cols).find(|&k| !same(row[k], fill)) {
+            return Err(value_error(format!(
+                "{key}: row {i} column {k} cannot be set: its accessor's elements have {} \
+                 components (the column only fills the table, with {fill})",
+                element.len()
+            )));
+        }
+        let n = element.len();
+        element.copy_from_slice(&row[..n]);
+    }
+    gltf.set_corner_values(attribute, &values)
+        .map_err(|e| value_error(format!("{key}: {e}")))
 }
 
 /// Checks that `v` can be written as a PLY value of type `t` (integers:
@@ -744,9 +766,9 @@ pub(crate) fn apply_edits(
         let sizes: Vec<i64> = a.polygon_sizes.iter().map(|&n| i64::from(n)).collect();
         check_unchanged_ints(&value, "polygon_sizes", &sizes, &[sizes.len()])?;
     }
-    // glTF: every per-corner entry is read-only
+    // glTF: the values go into their accessors, the corners are read-only
     let gltf = matches!(a.content, FormatAttributes::Gltf(_));
-    for (values_key, corners_key, attribute, _) in GLTF_CORNER_KEYS {
+    for (values_key, corners_key, attribute, fill) in GLTF_CORNER_KEYS {
         let (values, corners) = (get(values_key)?, get(corners_key)?);
         if !gltf || (values.is_none() && corners.is_none()) {
             continue;
@@ -761,11 +783,11 @@ pub(crate) fn apply_edits(
                 "{key}: the file has no {attribute} (attributes cannot be added)"
             )));
         };
-        if let Some(value) = values {
-            check_unchanged_floats(&value, values_key, &table)?;
-        }
         if let Some(value) = corners {
             check_unchanged_ints(&value, corners_key, &original, &[original.len() / 3, 3])?;
+        }
+        if let (Some(value), FormatAttributes::Gltf(g)) = (values, &mut a.content) {
+            apply_gltf_values(g, (values_key, attribute, fill), &table, &value)?;
         }
     }
     if let Some(value) = get("corner_uv")?

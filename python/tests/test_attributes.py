@@ -497,7 +497,7 @@ def test_gltf_seed_file_has_uv_per_corner():
     assert "colors" not in a and "corner_colors" not in a
 
 
-def test_gltf_round_trip_keeps_uv_and_colors_and_they_are_read_only(gltf_file, tmp_path):
+def test_gltf_round_trip_keeps_uv_and_colors_and_corners_are_read_only(gltf_file, tmp_path):
     v, f, a = normalnet.read_mesh(gltf_file, attributes=True)
     moved = v + np.array([0.5, -0.25, 0.125])
     out = tmp_path / f"out{gltf_file.suffix}"
@@ -508,7 +508,6 @@ def test_gltf_round_trip_keeps_uv_and_colors_and_they_are_read_only(gltf_file, t
     assert_same_attributes(a, a2)
     never = tmp_path / f"never{gltf_file.suffix}"
     for key, change, message in [
-        ("uv", lambda x: x + 0.25, "uv: row 0 differs.*cannot be edited"),
         ("colors", lambda x: x[:, :3], r"colors: shape \[6, 3\] differs"),
         ("corner_uv", lambda x: x[::-1], "corner_uv: cannot be edited"),
         ("corner_colors", lambda x: np.zeros_like(x), "corner_colors: cannot be edited"),
@@ -517,6 +516,35 @@ def test_gltf_round_trip_keeps_uv_and_colors_and_they_are_read_only(gltf_file, t
         b[key] = change(b[key])
         with pytest.raises(ValueError, match=message):
             normalnet.write_mesh(never, v, f, attributes=b)
+    assert not never.exists()
+
+
+def test_gltf_uv_and_color_edits_go_into_the_accessors(gltf_file, tmp_path):
+    v, f, a = normalnet.read_mesh(gltf_file, attributes=True)
+    b = copy.deepcopy(a)
+    b["uv"] = a["uv"] * 0.5 + 0.25
+    b["colors"][:, 1] = 0.5  # float rows: 0.5; normalized byte rows: 128 / 255
+    out = tmp_path / f"edited{gltf_file.suffix}"
+    normalnet.write_mesh(out, v, f, attributes=b)
+    v2, f2, a2 = normalnet.read_mesh(out, attributes=True)
+    np.testing.assert_array_equal(v2, v)
+    np.testing.assert_array_equal(f2, f)
+    np.testing.assert_array_equal(a2["uv"], b["uv"].astype(np.float32))
+    want = b["colors"].copy()
+    want[3:, 1] = 128 / 255
+    np.testing.assert_array_equal(a2["colors"], want)
+    for key in ("corner_uv", "corner_colors"):
+        np.testing.assert_array_equal(a2[key], a[key])
+    never = tmp_path / f"never{gltf_file.suffix}"
+    for row, column, value, message in [
+        (0, 3, 0.5, "colors: row 0 column 3 cannot be set: its accessor's elements have 3 components"),
+        (3, 0, 2.0, "colors: .*COLOR_0: element 3: 2 is outside the normalized range 0..=1"),
+        (0, 0, np.nan, "colors: .*COLOR_0: element 0: NaN is not finite"),
+    ]:
+        c = copy.deepcopy(a)
+        c["colors"][row, column] = value
+        with pytest.raises(ValueError, match=message):
+            normalnet.write_mesh(never, v, f, attributes=c)
     assert not never.exists()
 
 

@@ -1058,3 +1058,90 @@ fn broken_attribute_accessors_are_errors_naming_the_primitive() {
     );
     assert!(e.contains(&want), "want {want:?}, got {e:?}");
 }
+
+/// Edited UVs and colours go back into their accessors (floats as f32,
+/// normalized bytes as the nearest step), `min`/`max` follow, a `data:`
+/// buffer is encoded anew, and the written file reads back with the edits;
+/// values the accessors cannot hold are refused before anything changes.
+#[test]
+fn corner_values_written_back_into_the_accessors_read_back() {
+    let (mut doc, mut bin) = plate(true);
+    let count = (N - SEAM) * N;
+    let colours: Vec<u8> = (0..count).flat_map(|e| [e as u8, 255, 0, 51]).collect();
+    let colour = append_accessor(&mut doc, &mut bin, &colours, (5121, "VEC4", count), true);
+    doc["meshes"][0]["primitives"][1]["attributes"]["COLOR_0"] = json!(colour);
+    let uv0 = attribute_of(&doc, 0, "TEXCOORD_0");
+    doc["accessors"][uv0]["min"] = json!([0.0, 0.0]);
+    doc["accessors"][uv0]["max"] = json!([1.0, 1.0]);
+    let tmp = tempfile::tempdir().unwrap();
+    for glb in [true, false] {
+        let bytes = if glb {
+            glb_bytes(&doc, &bin)
+        } else {
+            // one .gltf with the buffer as a data: URI
+            let mut d = doc.clone();
+            d["buffers"][0]["uri"] = json!(format!(
+                "data:application/octet-stream;base64,{}",
+                base64(&bin)
+            ));
+            serde_json::to_vec(&d).unwrap()
+        };
+        let format = if glb { Format::Glb } else { Format::Gltf };
+        let mut file = parse_mesh_file(&bytes, format, Path::new("e.glb")).unwrap();
+        let FormatAttributes::Gltf(g) = &mut file.attributes.content else {
+            panic!("glTF attributes")
+        };
+        let mut uv = g.corner_values("TEXCOORD_0").unwrap().unwrap();
+        for v in &mut uv.values {
+            *v = vec![2.0 * v[0] + 0.1, 0.5 - v[1]];
+        }
+        let mut colour = g.corner_values("COLOR_0").unwrap().unwrap();
+        for v in &mut colour.values {
+            v[1] = 0.5;
+        }
+        // refused, nothing written: too few elements, a non-finite value,
+        // a normalized value beyond 1, a component too many
+        let before = g.clone();
+        let mut nan = colour.values.clone();
+        nan[3][0] = f64::NAN;
+        let mut beyond = colour.values.clone();
+        beyond[3][0] = 1.5;
+        let mut wide = colour.values.clone();
+        wide[3] = vec![0.0; 5];
+        for (name, values, want) in [
+            ("TEXCOORD_0", &uv.values[1..], "elements given"),
+            ("COLOR_0", &nan[..], "COLOR_0: element 3: NaN is not finite"),
+            ("COLOR_0", &beyond[..], "outside the normalized range"),
+            ("COLOR_0", &wide[..], "element 3 has 5 components"),
+            ("COLOR_1", &wide[..], "no primitive has it"),
+        ] {
+            let e = g.set_corner_values(name, values).unwrap_err().to_string();
+            assert!(e.contains(want), "{e}");
+        }
+        assert_eq!(*g, before);
+
+        g.set_corner_values("TEXCOORD_0", &uv.values).unwrap();
+        g.set_corner_values("COLOR_0", &colour.values).unwrap();
+        let out = tmp.path().join(if glb { "e.glb" } else { "e.gltf" });
+        write_mesh_file(&out, &file.mesh, &file.attributes, &Default::default()).unwrap();
+        let again = read_mesh_file(&out).unwrap();
+        let g2 = gltf(&again);
+        let read_uv = g2.corner_values("TEXCOORD_0").unwrap().unwrap();
+        let f32s = |vs: &[Vec<f64>]| -> Vec<Vec<f64>> {
+            vs.iter()
+                .map(|v| v.iter().map(|&x| f64::from(x as f32)).collect())
+                .collect()
+        };
+        assert_eq!(read_uv.values, f32s(&uv.values));
+        assert_eq!(read_uv.corners, uv.corners);
+        let read_colour = g2.corner_values("COLOR_0").unwrap().unwrap();
+        for (e, v) in read_colour.values.iter().enumerate() {
+            assert_eq!(v, &[e as f64 / 255.0, 128.0 / 255.0, 0.0, 0.2]);
+        }
+        let bounds = &g2.json["accessors"][uv0];
+        // the shortest digits of the f32 bounds (glTF 2.0 §5.1.1)
+        assert_eq!(bounds["min"][0].as_f64(), Some(0.1), "{bounds}");
+        assert_eq!(bounds["max"][1].as_f64(), Some(0.5), "{bounds}");
+        assert_eq!(again.mesh, file.mesh);
+    }
+}

@@ -17,7 +17,7 @@ pub(crate) const UNSIGNED_SHORT: u64 = 5123;
 pub(crate) const UNSIGNED_INT: u64 = 5125;
 
 /// The bytes of a component type, `None` for a type glTF does not define.
-fn component_size(component_type: u64) -> Option<usize> {
+pub(crate) fn component_size(component_type: u64) -> Option<usize> {
     match component_type {
         5120 | 5121 => Some(1),
         5122 | 5123 => Some(2),
@@ -256,6 +256,76 @@ pub(crate) fn read_number(
         ),
     };
     if normalized { (x / max).max(-1.0) } else { x }
+}
+
+/// The bytes (little-endian, `size` of them) that store the number `v`
+/// as a component of `component_type`: the inverse of [`read_number`]. A
+/// float as the nearest f32; a `normalized` integer as the nearest step
+/// (`round(v · max)`, `v` within 0..=1 unsigned, −1..=1 signed); another
+/// integer as it is, which must be whole. An error says why `v` cannot be
+/// stored (not finite, out of the type's range, not whole).
+pub(crate) fn encode_number(
+    component_type: u64,
+    normalized: bool,
+    v: f64,
+) -> Result<([u8; 4], usize), String> {
+    if !v.is_finite() {
+        return Err(format!("{v} is not finite"));
+    }
+    let int = |lo: f64, hi: f64, bits: fn(f64) -> ([u8; 4], usize)| {
+        let x = if normalized { (v * hi).round() } else { v };
+        if normalized && !(lo / hi..=1.0).contains(&v) {
+            Err(format!(
+                "{v} is outside the normalized range {}..=1",
+                lo / hi
+            ))
+        } else if x.fract() != 0.0 || !(lo..=hi).contains(&x) {
+            Err(format!("{v} is not a whole number within {lo}..={hi}"))
+        } else {
+            Ok(bits(x))
+        }
+    };
+    fn pad(b: &[u8]) -> ([u8; 4], usize) {
+        let mut out = [0; 4];
+        out[..b.len()].copy_from_slice(b);
+        (out, b.len())
+    }
+    match component_type {
+        FLOAT if v.abs() <= f64::from(f32::MAX) => Ok(((v as f32).to_le_bytes(), 4)),
+        FLOAT => Err(format!("{v} is beyond the range of a 32-bit float")),
+        BYTE => int(-127.0, 127.0, |x| pad(&(x as i8).to_le_bytes())),
+        UNSIGNED_BYTE => int(0.0, 255.0, |x| pad(&(x as u8).to_le_bytes())),
+        SHORT => int(-32767.0, 32767.0, |x| pad(&(x as i16).to_le_bytes())),
+        UNSIGNED_SHORT => int(0.0, 65535.0, |x| pad(&(x as u16).to_le_bytes())),
+        _ => int(0.0, f64::from(u32::MAX), |x| pad(&(x as u32).to_le_bytes())),
+    }
+}
+
+/// Sets `accessors[index].min` / `.max`, where the accessor has them, to
+/// the component-wise bounds of its elements as stored (integers as the
+/// stored integers, glTF 2.0 §5.1.1).
+pub(crate) fn refresh_bounds(json: &mut Value, buffer: &[u8], index: usize, layout: &Layout) {
+    let Some(Value::Object(a)) = json.get_mut("accessors").and_then(|a| a.get_mut(index)) else {
+        return;
+    };
+    if !a.contains_key("min") || !a.contains_key("max") || layout.count == 0 {
+        return;
+    }
+    let number = |x: f64| match layout.component_type {
+        FLOAT => json_f32(x as f32),
+        _ => Value::from(x as i64),
+    };
+    let (mut lo, mut hi) = (Vec::new(), Vec::new());
+    for c in 0..layout.components {
+        let values = (0..layout.count).map(|i| read_number(buffer, layout, i, c, false));
+        let (min, max) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+        lo.push(number(min));
+        hi.push(number(max));
+    }
+    a.insert("min".into(), Value::Array(lo));
+    a.insert("max".into(), Value::Array(hi));
 }
 
 /// An f32 as the JSON number with the fewest digits that reads back to it

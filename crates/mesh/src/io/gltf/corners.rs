@@ -56,6 +56,116 @@ impl GltfAttributes {
         })
     }
 
+    /// Writes `values` into the accessors of vertex attribute `attribute`:
+    /// the inverse of [`GltfAttributes::corner_values`], `values` holding
+    /// each accessor's elements once in the same order (as
+    /// [`GltfCornerValues::values`]). Floats are stored as the nearest f32,
+    /// normalized integers as the nearest step of their type; an accessor's
+    /// `min` / `max`, where it has them, follow, and a `data:` buffer is
+    /// encoded anew. The connectivity (which corner uses which element)
+    /// stays as read.
+    ///
+    /// # Errors
+    /// [`MeshError::InvalidParameter`] (nothing written) when no primitive
+    /// has the attribute, an accessor cannot be read (as `corner_values`),
+    /// `values` holds another number of elements or an element another
+    /// number of components than its accessor, or a value cannot be stored
+    /// in its component type (not finite, out of range, not whole): the
+    /// message names the attribute, the element and the accessor.
+    pub fn set_corner_values(
+        &mut self,
+        attribute: &str,
+        values: &[Vec<f64>],
+    ) -> Result<(), MeshError> {
+        let writes =
+            self.encode(attribute, values)
+                .map_err(|message| MeshError::InvalidParameter {
+                    name: "glTF attribute values",
+                    message: format!("{attribute}: {message}"),
+                })?;
+        for (index, layout, bytes) in writes {
+            let buffer = &mut self.buffers[layout.buffer].bytes;
+            for (at, (b, size)) in bytes {
+                buffer[at..at + size].copy_from_slice(&b[..size]);
+            }
+            accessor::refresh_bounds(&mut self.json, buffer, index, &layout);
+            if let super::GltfBufferSource::DataUri { prefix } = &self.buffers[layout.buffer].source
+            {
+                let uri = super::container::encode_data(prefix, &self.buffers[layout.buffer].bytes);
+                if let Some(Value::Object(entry)) = self
+                    .json
+                    .pointer_mut(&format!("/buffers/{}", layout.buffer))
+                {
+                    entry.insert("uri".into(), Value::String(uri));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The byte writes of [`GltfAttributes::set_corner_values`], per
+    /// accessor (its index, its layout, each component's offset and
+    /// bytes), every value checked before anything is written.
+    #[allow(clippy::type_complexity)]
+    fn encode(
+        &self,
+        attribute: &str,
+        values: &[Vec<f64>],
+    ) -> Result<Vec<(usize, accessor::Layout, Vec<(usize, ([u8; 4], usize))>)>, String> {
+        let lengths: Vec<usize> = self.buffers.iter().map(|b| b.bytes.len()).collect();
+        let mut writes: Vec<(usize, accessor::Layout, Vec<_>)> = Vec::new();
+        let mut next = 0;
+        for prim in &self.primitives {
+            let Some(index) = self.attribute_accessor(prim.mesh, prim.primitive, attribute)? else {
+                continue;
+            };
+            if writes.iter().any(|(known, ..)| *known == index) {
+                continue;
+            }
+            let layout = accessor::layout(&self.json, &lengths, index)?;
+            let normalized = item(&self.json, "accessors", index)?
+                .get("normalized")
+                .and_then(Value::as_bool)
+                .unwrap_or(false);
+            let elements = values.get(next..next + layout.count).ok_or_else(|| {
+                format!(
+                    "{} elements given, the accessors hold more (accessors[{index}] has {} from                      element {next})",
+                    values.len(),
+                    layout.count
+                )
+            })?;
+            let mut bytes = Vec::with_capacity(layout.count * layout.components);
+            for (i, element) in elements.iter().enumerate() {
+                if element.len() != layout.components {
+                    return Err(format!(
+                        "element {} has {} components, accessors[{index}] {}",
+                        next + i,
+                        element.len(),
+                        layout.components
+                    ));
+                }
+                for (c, &v) in element.iter().enumerate() {
+                    let size = accessor::component_size(layout.component_type).unwrap_or(4);
+                    let encoded = accessor::encode_number(layout.component_type, normalized, v)
+                        .map_err(|e| format!("element {}: {e} (accessors[{index}])", next + i))?;
+                    bytes.push((layout.at(i) + c * size, encoded));
+                }
+            }
+            next += layout.count;
+            writes.push((index, layout, bytes));
+        }
+        if writes.is_empty() {
+            return Err("no primitive has it".into());
+        }
+        if next != values.len() {
+            return Err(format!(
+                "{} elements given, the accessors hold {next}",
+                values.len()
+            ));
+        }
+        Ok(writes)
+    }
+
     fn gather(&self, attribute: &str) -> Result<Option<GltfCornerValues>, String> {
         let lengths: Vec<usize> = self.buffers.iter().map(|b| b.bytes.len()).collect();
         let mut values: Vec<Vec<f64>> = Vec::new();
