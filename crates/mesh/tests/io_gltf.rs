@@ -925,14 +925,21 @@ fn check_corners(mesh: &Mesh, g: &GltfAttributes, cv: &GltfCornerValues) -> Vec<
     bases
 }
 
-#[test]
-fn uv_and_colours_per_corner_follow_the_welded_triangles() {
+/// The plate (GLB) with `COLOR_0` on primitive 1 only: normalized
+/// unsigned bytes, RGBA `(e, 255, 0, 51)` for element `e`; the document,
+/// the BIN chunk and the colour count.
+fn coloured_plate() -> (Value, Vec<u8>, usize) {
     let (mut doc, mut bin) = plate(true);
-    // COLOR_0 on primitive 1 only: normalized unsigned bytes, RGBA
     let count = (N - SEAM) * N;
     let colours: Vec<u8> = (0..count).flat_map(|e| [e as u8, 255, 0, 51]).collect();
     let colour = append_accessor(&mut doc, &mut bin, &colours, (5121, "VEC4", count), true);
     doc["meshes"][0]["primitives"][1]["attributes"]["COLOR_0"] = json!(colour);
+    (doc, bin, count)
+}
+
+#[test]
+fn uv_and_colours_per_corner_follow_the_welded_triangles() {
+    let (doc, bin, count) = coloured_plate();
     let file = parse_mesh_file(&glb_bytes(&doc, &bin), Format::Glb, Path::new("c.glb")).unwrap();
     let (mesh, g) = (&file.mesh, gltf(&file));
 
@@ -1065,11 +1072,7 @@ fn broken_attribute_accessors_are_errors_naming_the_primitive() {
 /// values the accessors cannot hold are refused before anything changes.
 #[test]
 fn corner_values_written_back_into_the_accessors_read_back() {
-    let (mut doc, mut bin) = plate(true);
-    let count = (N - SEAM) * N;
-    let colours: Vec<u8> = (0..count).flat_map(|e| [e as u8, 255, 0, 51]).collect();
-    let colour = append_accessor(&mut doc, &mut bin, &colours, (5121, "VEC4", count), true);
-    doc["meshes"][0]["primitives"][1]["attributes"]["COLOR_0"] = json!(colour);
+    let (mut doc, bin, _) = coloured_plate();
     let uv0 = attribute_of(&doc, 0, "TEXCOORD_0");
     doc["accessors"][uv0]["min"] = json!([0.0, 0.0]);
     doc["accessors"][uv0]["max"] = json!([1.0, 1.0]);
