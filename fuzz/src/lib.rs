@@ -79,3 +79,31 @@ pub fn check_file_reader(bytes: &[u8], format: Format) {
         .unwrap_or_else(|e| panic!("the written file cannot be written again: {e}"));
     assert!(twice == encoded, "a second write → read → write changed the file");
 }
+
+/// glTF: every per-corner attribute the reader gives (`TEXCOORD_0`,
+/// `COLOR_0`) written back unchanged with `set_corner_values` reads back
+/// as the same values; the setter refuses only non-finite ones.
+pub fn check_gltf_corner_values(bytes: &[u8]) {
+    use normalnet_mesh::io::attributes::FormatAttributes;
+    use normalnet_mesh::io::parse_mesh_file;
+    let Ok(file) = parse_mesh_file(bytes, Format::Glb, Path::new("fuzz-input")) else {
+        return;
+    };
+    let FormatAttributes::Gltf(gltf) = &file.attributes.content else {
+        return;
+    };
+    for attribute in ["TEXCOORD_0", "COLOR_0"] {
+        let Ok(Some(read)) = gltf.corner_values(attribute) else {
+            continue;
+        };
+        let mut edited = gltf.clone();
+        let set = edited.set_corner_values(attribute, &read.values);
+        if read.values.iter().flatten().any(|v| !v.is_finite()) {
+            assert!(set.is_err(), "{attribute}: a non-finite value was stored");
+            continue;
+        }
+        set.unwrap_or_else(|e| panic!("{attribute}: the values read cannot be written back: {e}"));
+        let again = edited.corner_values(attribute).expect("readable").expect("present");
+        assert_eq!(again, read, "{attribute}: written back, read otherwise");
+    }
+}
