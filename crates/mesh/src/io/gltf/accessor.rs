@@ -272,17 +272,19 @@ pub(crate) fn encode_number(
     if !v.is_finite() {
         return Err(format!("{v} is not finite"));
     }
-    let int = |lo: f64, hi: f64, bits: fn(f64) -> ([u8; 4], usize)| {
-        let x = if normalized { (v * hi).round() } else { v };
-        if normalized && !(lo / hi..=1.0).contains(&v) {
-            Err(format!(
-                "{v} is outside the normalized range {}..=1",
-                lo / hi
-            ))
-        } else if x.fract() != 0.0 || !(lo..=hi).contains(&x) {
-            Err(format!("{v} is not a whole number within {lo}..={hi}"))
+    // `min ..= max` the type's range; normalized values map onto
+    // `−max ..= max` (signed) or `0 ..= max`
+    let int = |min: f64, max: f64, bits: fn(f64) -> ([u8; 4], usize)| {
+        if normalized {
+            let lo = if min < 0.0 { -1.0 } else { 0.0 };
+            if !(lo..=1.0).contains(&v) {
+                return Err(format!("{v} is outside the normalized range {lo}..=1"));
+            }
+            Ok(bits((v * max).round()))
+        } else if v.fract() != 0.0 || !(min..=max).contains(&v) {
+            Err(format!("{v} is not a whole number within {min}..={max}"))
         } else {
-            Ok(bits(x))
+            Ok(bits(v))
         }
     };
     fn pad(b: &[u8]) -> ([u8; 4], usize) {
@@ -293,9 +295,9 @@ pub(crate) fn encode_number(
     match component_type {
         FLOAT if v.abs() <= f64::from(f32::MAX) => Ok(((v as f32).to_le_bytes(), 4)),
         FLOAT => Err(format!("{v} is beyond the range of a 32-bit float")),
-        BYTE => int(-127.0, 127.0, |x| pad(&(x as i8).to_le_bytes())),
+        BYTE => int(-128.0, 127.0, |x| pad(&(x as i8).to_le_bytes())),
         UNSIGNED_BYTE => int(0.0, 255.0, |x| pad(&(x as u8).to_le_bytes())),
-        SHORT => int(-32767.0, 32767.0, |x| pad(&(x as i16).to_le_bytes())),
+        SHORT => int(-32768.0, 32767.0, |x| pad(&(x as i16).to_le_bytes())),
         UNSIGNED_SHORT => int(0.0, 65535.0, |x| pad(&(x as u16).to_le_bytes())),
         _ => int(0.0, f64::from(u32::MAX), |x| pad(&(x as u32).to_le_bytes())),
     }
@@ -421,5 +423,48 @@ mod tests {
         assert_eq!(read_number(&bytes, &l, 1, 0, false), 7.0);
         assert_eq!(read_number(&bytes, &l, 1, 1, true), f64::from(0.1f32));
         assert_eq!(read_number(&bytes, &l, 0, 1, false), -1.5);
+    }
+
+    /// Found by fuzzing (read_gltf_file, 6.2M runs in): a plain SHORT
+    /// −32768 read could not be written back. Every stored integer of the
+    /// small types, and the extremes of the large ones, read → encode →
+    /// read gives the same number, normalized or not.
+    #[test]
+    fn encode_number_inverts_read_number_for_every_stored_value() {
+        let stored = |t: u64, x: i64| -> Vec<u8> {
+            match t {
+                BYTE => (x as i8).to_le_bytes().to_vec(),
+                UNSIGNED_BYTE => (x as u8).to_le_bytes().to_vec(),
+                SHORT => (x as i16).to_le_bytes().to_vec(),
+                UNSIGNED_SHORT => (x as u16).to_le_bytes().to_vec(),
+                _ => (x as u32).to_le_bytes().to_vec(),
+            }
+        };
+        let cases: [(u64, Vec<i64>); 5] = [
+            (BYTE, (-128..=127).collect()),
+            (UNSIGNED_BYTE, (0..=255).collect()),
+            (SHORT, vec![-32768, -32767, -1, 0, 1, 32767]),
+            (UNSIGNED_SHORT, vec![0, 1, 65534, 65535]),
+            (UNSIGNED_INT, vec![0, 1, i64::from(u32::MAX)]),
+        ];
+        for (t, values) in cases {
+            for x in values {
+                for normalized in [false, true] {
+                    let mut bytes = stored(t, x);
+                    let v = read_number(&bytes, &one(t, 1), 0, 0, normalized);
+                    let (b, size) = encode_number(t, normalized, v).unwrap();
+                    bytes.copy_from_slice(&b[..size]);
+                    let again = read_number(&bytes, &one(t, 1), 0, 0, normalized);
+                    assert_eq!(again, v, "type {t} value {x} normalized {normalized}");
+                }
+            }
+        }
+        for (t, normalized, v) in [
+            (SHORT, false, 0.5),
+            (BYTE, true, 1.5),
+            (UNSIGNED_BYTE, true, -0.1),
+        ] {
+            assert!(encode_number(t, normalized, v).is_err(), "{t} {v}");
+        }
     }
 }
