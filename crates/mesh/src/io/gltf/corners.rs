@@ -122,14 +122,13 @@ impl GltfAttributes {
             if writes.iter().any(|(known, ..)| *known == index) {
                 continue;
             }
-            let layout = accessor::layout(&self.json, &lengths, index)?;
-            let normalized = item(&self.json, "accessors", index)?
-                .get("normalized")
-                .and_then(Value::as_bool)
-                .unwrap_or(false);
+            let what = format!("meshes[{}].primitives[{}]", prim.mesh, prim.primitive);
+            let (layout, normalized) = self.vector_accessor(index, &lengths, attribute, &what)?;
+            let size = accessor::component_size(layout.component_type).unwrap_or(4);
             let elements = values.get(next..next + layout.count).ok_or_else(|| {
                 format!(
-                    "{} elements given, the accessors hold more (accessors[{index}] has {} from                      element {next})",
+                    "{} elements given, the accessors hold more (accessors[{index}] has {} from \
+                     element {next})",
                     values.len(),
                     layout.count
                 )
@@ -145,7 +144,6 @@ impl GltfAttributes {
                     ));
                 }
                 for (c, &v) in element.iter().enumerate() {
-                    let size = accessor::component_size(layout.component_type).unwrap_or(4);
                     let encoded = accessor::encode_number(layout.component_type, normalized, v)
                         .map_err(|e| format!("element {}: {e} (accessors[{index}])", next + i))?;
                     bytes.push((layout.at(i) + c * size, encoded));
@@ -235,6 +233,27 @@ impl GltfAttributes {
         attribute: &str,
         what: &str,
     ) -> Result<Vec<Vec<f64>>, String> {
+        let (layout, normalized) = self.vector_accessor(index, lengths, attribute, what)?;
+        let buffer = &self.buffers[layout.buffer].bytes;
+        Ok((0..layout.count)
+            .map(|i| {
+                (0..layout.components)
+                    .map(|c| accessor::read_number(buffer, &layout, i, c, normalized))
+                    .collect()
+            })
+            .collect())
+    }
+
+    /// The layout of `accessors[index]`, a `VEC2`, `VEC3` or `VEC4`
+    /// accessor used as `attribute` by `what`, and whether it is
+    /// normalized.
+    fn vector_accessor(
+        &self,
+        index: usize,
+        lengths: &[usize],
+        attribute: &str,
+        what: &str,
+    ) -> Result<(accessor::Layout, bool), String> {
         let layout = accessor::layout(&self.json, lengths, index)
             .map_err(|e| format!("{what}: {attribute}: {e}"))?;
         let object = item(&self.json, "accessors", index)?;
@@ -248,13 +267,6 @@ impl GltfAttributes {
             .get("normalized")
             .and_then(Value::as_bool)
             .unwrap_or(false);
-        let buffer = &self.buffers[layout.buffer].bytes;
-        Ok((0..layout.count)
-            .map(|i| {
-                (0..layout.components)
-                    .map(|c| accessor::read_number(buffer, &layout, i, c, normalized))
-                    .collect()
-            })
-            .collect())
+        Ok((layout, normalized))
     }
 }
