@@ -101,8 +101,10 @@ fn the_default_model_is_built_into_the_binary() {
         6,
         "{text}"
     );
+    assert!(text.contains("int8        full ranges"), "{text}");
     let o = run(&["models", "--json"]);
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["int8_range"], "full");
     let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lite/manifest.toml");
     let shipped: toml::Value = toml::from_str(&std::fs::read_to_string(shipped).unwrap()).unwrap();
     assert_eq!(json["format"].as_i64(), shipped["format"].as_integer());

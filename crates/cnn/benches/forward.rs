@@ -1,12 +1,13 @@
 //! Forward samples/s of the `lite` and `paper` networks on sheet-like grids,
-//! f32 and (where the CPU has AVX-512 VNNI) int8 residual blocks.
+//! f32 and (where the path has int8 kernels) int8 parts, with the full and
+//! the narrow integer ranges. `NORMALNET_ISA` picks the path.
 #![allow(missing_docs)]
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use normalnet_cnn::{Arithmetic, Cnn};
+use normalnet_cnn::{Arithmetic, Cnn, Int8Range};
 
 fn forward(c: &mut Criterion) {
     for (name, grid, channels, batch) in [
@@ -46,6 +47,13 @@ fn forward(c: &mut Criterion) {
                     g.bench_function(format!("batch{batch}_int8_all_sparse"), |b| {
                         b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
                     });
+                    // the same with narrow integer ranges (networks trained
+                    // for them): `vpmaddubsw` on plain AVX2
+                    cnn.set_int8_range(Int8Range::Narrow);
+                    g.bench_function(format!("batch{batch}_int8_all_sparse_narrow"), |b| {
+                        b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
+                    });
+                    cnn.set_int8_range(Int8Range::Full);
                 }
             }
         }

@@ -10,8 +10,75 @@
 //! channel (its largest |w| / 127). Products are summed exactly in i32 and
 //! scaled back to f32 once per output, where the bias, the residual sum and
 //! the ReLU are applied as in [`crate::conv`].
+//!
+//! [`Int8Range::Narrow`] halves both ranges (bytes 0 ..= 127, weights ±63)
+//! for networks trained for it: the VNNI kernels are the same, and plain
+//! AVX2 can then sum two `vpmaddubsw` pairs in i16 exactly
+//! ([`crate::conv_int8_avx2`]).
 
 use crate::conv::{CubeMask, FoldedConv, Region, output_side, taps};
+
+/// The integer ranges of the int8 arithmetic: a property of the networks
+/// (what they were trained to tolerate), not of the CPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "lowercase")
+)]
+pub enum Int8Range {
+    /// block inputs in 0 ..= 255 (max / 255 per sample), weights in ±127
+    /// (per output channel), stem inputs in ±127: the shipped networks
+    #[default]
+    Full,
+    /// block inputs in 0 ..= 127, weights in ±63, stem inputs in ±63
+    /// (stored as 1 ..= 127, zero at 64): two `vpmaddubsw` pair sums of
+    /// plain AVX2 add in i16 without overflow (4 · 127 · 63 = 32,004), so
+    /// AVX2 does 64 products in 5 instructions (3 multiplies) instead of 8
+    /// (4)
+    Narrow,
+}
+
+impl Int8Range {
+    /// The largest byte of a block input.
+    pub(crate) fn activation_max(self) -> f32 {
+        match self {
+            Int8Range::Full => 255.0,
+            Int8Range::Narrow => 127.0,
+        }
+    }
+
+    /// The largest |weight|.
+    pub(crate) fn weight_max(self) -> f32 {
+        match self {
+            Int8Range::Full => 127.0,
+            Int8Range::Narrow => 63.0,
+        }
+    }
+
+    /// The stem's largest |input| step and the byte that stores zero.
+    pub(crate) fn stem_levels(self) -> (i32, i32) {
+        match self {
+            Int8Range::Full => (127, 128),
+            Int8Range::Narrow => (63, 64),
+        }
+    }
+
+    /// `full` or `narrow` (the bundle manifest's `int8_range`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Int8Range::Full => "full",
+            Int8Range::Narrow => "narrow",
+        }
+    }
+
+    /// The range called `name` ([`Self::name`]).
+    pub fn from_name(name: &str) -> Option<Int8Range> {
+        [Int8Range::Full, Int8Range::Narrow]
+            .into_iter()
+            .find(|r| r.name() == name)
+    }
+}
 
 /// A [`FoldedConv`] with its weights in signed bytes, laid out
 /// `[k³][cin/4][cout][4]` (four input channels per i32 lane).
@@ -33,19 +100,23 @@ pub(crate) struct Int8Conv {
     /// reads (≥ `pad`; `pad` unless [`Int8Conv::reading_layout`] says
     /// otherwise)
     layout_pad: usize,
+    /// the integer ranges of its weights and inputs
+    range: Int8Range,
 }
 
 impl Int8Conv {
-    /// Quantizes `c`; `None` where the layout does not fit the kernel
-    /// (input channels not a multiple of 4, outputs not 16, 32, 64, 128 or 256).
-    pub(crate) fn new(c: &FoldedConv) -> Option<Int8Conv> {
+    /// Quantizes `c` to `range`; `None` where the layout does not fit the
+    /// kernel (input channels not a multiple of 4, outputs not 16, 32, 64,
+    /// 128 or 256).
+    pub(crate) fn new(c: &FoldedConv, range: Int8Range) -> Option<Int8Conv> {
         // exactly the output channel counts `run` dispatches on
         if !c.cin.is_multiple_of(4) || !matches!(c.cout, 16 | 32 | 64 | 128 | 256) {
             return None;
         }
         let (cin, cout) = (c.cin, c.cout);
         let k3 = c.k.pow(3);
-        let scale = weight_scales(c);
+        let scale = weight_scales(&c.w, cout, range);
+        let wmax = range.weight_max();
         let groups = cin / 4;
         let mut w = vec![0i8; k3 * cin * cout];
         for tap in 0..k3 {
@@ -54,7 +125,7 @@ impl Int8Conv {
                     let v = c.w[(tap * cin + ci) * cout + co] / scale[co];
                     let (g, r) = (ci / 4, ci % 4);
                     w[((tap * groups + g) * cout + co) * 4 + r] =
-                        v.round().clamp(-127.0, 127.0) as i8;
+                        v.round().clamp(-wmax, wmax) as i8;
                 }
             }
         }
@@ -81,7 +152,14 @@ impl Int8Conv {
             stride: c.stride,
             pad: c.pad,
             layout_pad: c.pad,
+            range,
         })
+    }
+
+    /// The integer ranges it was quantized to (its inputs must be
+    /// [`quantize`]d to the same).
+    pub(crate) fn range(&self) -> Int8Range {
+        self.range
     }
 
     /// The same convolution reading inputs quantized with `layout_pad` zero
@@ -191,17 +269,23 @@ impl Int8Conv {
     }
 }
 
-/// Per output channel of `c`, the scale of its signed-byte weights: its
-/// largest |w| / 127 (1 for an all-zero channel).
-pub(crate) fn weight_scales(c: &FoldedConv) -> Vec<f32> {
-    (0..c.cout)
+/// Per output channel of weights `w` (`[k³][cin][cout]`), the scale of its
+/// signed-byte weights: its
+/// largest |w| / `range`'s largest weight (127, or 63 narrow; 1 for an
+/// all-zero channel).
+pub(crate) fn weight_scales(w: &[f32], cout: usize, range: Int8Range) -> Vec<f32> {
+    (0..cout)
         .map(|co| {
-            let max =
-                c.w.iter()
-                    .skip(co)
-                    .step_by(c.cout)
-                    .fold(0.0f32, |m, w| m.max(w.abs()));
-            if max > 0.0 { max / 127.0 } else { 1.0 }
+            let max = w
+                .iter()
+                .skip(co)
+                .step_by(cout)
+                .fold(0.0f32, |m, w| m.max(w.abs()));
+            if max > 0.0 {
+                max / range.weight_max()
+            } else {
+                1.0
+            }
         })
         .collect()
 }
@@ -248,7 +332,9 @@ impl Int8Conv {
 /// `x` (`[n, n, n, cin]`, all ≥ 0, as after a ReLU) as bytes in the layout
 /// [`Int8Conv::run`] reads: every W row of `n` cubes between `pad` zero
 /// cubes on each side (so that no tap along W is ever out of range).
-/// byte = ⌊x / s + ½⌋ with s = max(x) / 255. Returns the bytes (the first
+/// byte = ⌊x / s + ½⌋ with s = max(x) / 255 (`range` narrow: max(x) / 127,
+/// so every byte is ≤ 127: x / s ≤ 127 to within rounding, and + ½
+/// truncates to 127). Returns the bytes (the first
 /// `n²·(n + 2·pad)·cin` of `buffer`, which only grows: no zero fill per
 /// call) and s (1 for an all-zero input). With `rows` (one flag per W row,
 /// as [`Int8Conv::rows_read`] gives), only the flagged rows are written (the
@@ -260,6 +346,7 @@ pub(crate) fn quantize<'a>(
     x: &[f32],
     n: usize,
     pad: usize,
+    range: Int8Range,
     (rows, max): (Option<&[bool]>, Option<f32>),
     buffer: &'a mut Vec<u8>,
 ) -> (&'a [u8], f32) {
@@ -286,7 +373,11 @@ pub(crate) fn quantize<'a>(
         (None, false) if avx2 => unsafe { max_avx2(x) },
         _ => x.iter().fold(0.0f32, |m, &v| m.max(v)),
     };
-    let scale = if max > 0.0 { max / 255.0 } else { 1.0 };
+    let scale = if max > 0.0 {
+        max / range.activation_max()
+    } else {
+        1.0
+    };
     let inv = 1.0 / scale;
     let wanted = |r: usize| rows.is_none_or(|rows| rows[r]);
     for (_, (x, o)) in x
@@ -650,50 +741,70 @@ mod tests {
             (32, 64, 2, 7),
             (64, 64, 1, 4),
         ] {
-            let f = conv(cin, cout, stride, (cin * cout + stride) as u32);
-            let q = Int8Conv::new(&f).expect("layout fits");
-            let mut state = 7u32;
-            let x: Vec<f32> = (0..n * n * n * cin)
-                .map(|_| {
-                    state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                    let u = (state >> 8) as f32 / (1u32 << 24) as f32;
-                    // ReLU-like: a third zeros, the rest in [0, 2)
-                    if u < 0.33 {
-                        0.0
-                    } else {
-                        2.0 * (u - 0.33) / 0.67
-                    }
-                })
-                .collect();
-            let m = f.output_side(n);
-            for (accumulate, relu) in [(false, true), (true, true), (false, false)] {
-                let start: Vec<f32> = (0..m * m * m * cout)
-                    .map(|i| (i % 7) as f32 * 0.1)
-                    .collect();
-                let mut want = start.clone();
-                f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
-                let mut buffer = Vec::new();
-                let (xq, sx) = quantize(
-                    normalnet_isa::Isa::detected(),
-                    &x,
-                    n,
-                    q.input_pad(),
-                    (None, None),
-                    &mut buffer,
-                );
-                let got = on_every_path(&q, xq, sx, n, &start, [accumulate, relu], None);
-                let range = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
-                let worst = want
-                    .iter()
-                    .zip(&got)
-                    .fold(0.0f32, |m, (a, b)| m.max((a - b).abs()));
-                // 8-bit inputs and weights: about 1 % of the output range
-                assert!(
-                    worst < 0.02 * range,
-                    "cin {cin} cout {cout}: worst {worst} of range {range}"
-                );
-                assert!(worst > 0.0, "quantization must show somewhere");
+            for range in [Int8Range::Full, Int8Range::Narrow] {
+                integer_convolution_near_f32(cin, cout, stride, n, range);
             }
+        }
+    }
+
+    /// [`Int8Conv`] against its f32 convolution on ReLU-like inputs: within
+    /// the quantization error (about 1 % of the output range with full
+    /// ranges; half the steps each way narrow: 4 %).
+    fn integer_convolution_near_f32(
+        cin: usize,
+        cout: usize,
+        stride: usize,
+        n: usize,
+        range: Int8Range,
+    ) {
+        let f = conv(cin, cout, stride, (cin * cout + stride) as u32);
+        let q = Int8Conv::new(&f, range).expect("layout fits");
+        let mut state = 7u32;
+        let x: Vec<f32> = (0..n * n * n * cin)
+            .map(|_| {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let u = (state >> 8) as f32 / (1u32 << 24) as f32;
+                // ReLU-like: a third zeros, the rest in [0, 2)
+                if u < 0.33 {
+                    0.0
+                } else {
+                    2.0 * (u - 0.33) / 0.67
+                }
+            })
+            .collect();
+        let m = f.output_side(n);
+        for (accumulate, relu) in [(false, true), (true, true), (false, false)] {
+            let start: Vec<f32> = (0..m * m * m * cout)
+                .map(|i| (i % 7) as f32 * 0.1)
+                .collect();
+            let mut want = start.clone();
+            f.run(Level::detect(), &x, n, &mut want, accumulate, relu, None);
+            let mut buffer = Vec::new();
+            let (xq, sx) = quantize(
+                normalnet_isa::Isa::detected(),
+                &x,
+                n,
+                q.input_pad(),
+                q.range(),
+                (None, None),
+                &mut buffer,
+            );
+            let got = on_every_path(&q, xq, sx, n, &start, [accumulate, relu], None);
+            let span = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+            let worst = want
+                .iter()
+                .zip(&got)
+                .fold(0.0f32, |m, (a, b)| m.max((a - b).abs()));
+            // 8-bit inputs and weights: about 1 % of the output range
+            let tolerance = match range {
+                Int8Range::Full => 0.02,
+                Int8Range::Narrow => 0.08,
+            };
+            assert!(
+                worst < tolerance * span,
+                "{range:?}: cin {cin} cout {cout}: worst {worst} of range {span}"
+            );
+            assert!(worst > 0.0, "quantization must show somewhere");
         }
     }
 
@@ -778,15 +889,17 @@ mod tests {
         }
     }
 
-    /// Random bytes of an `[n, n, n, cin]` input, and the same bytes with a
-    /// zero cube before and after every W row (the layout `quantize` writes
-    /// for padding 1).
+    /// Random bytes of an `[n, n, n, cin]` input (every byte `range`
+    /// allows), and the same bytes with a zero cube before and after every
+    /// W row (the layout `quantize` writes for padding 1).
     fn input_and_padded(
         n: usize,
         cin: usize,
+        range: Int8Range,
         next: &mut impl FnMut() -> u32,
     ) -> (Vec<u8>, Vec<u8>) {
-        let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % 256) as u8).collect();
+        let top = range.activation_max() as u32 + 1;
+        let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % top) as u8).collect();
         let padded = x
             .chunks_exact(n * cin)
             .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
@@ -824,10 +937,12 @@ mod tests {
                 bias: Some((0..cout).map(|i| i as f32 * 0.01).collect()),
             };
             let f = FoldedConv::new(&c, &BatchNormWeights::identity(cout));
-            let q = Int8Conv::new(&f).expect("layout fits").reading_layout(1);
+            let q = Int8Conv::new(&f, Int8Range::Full)
+                .expect("layout fits")
+                .reading_layout(1);
             assert_eq!(q.input_pad(), 1);
             let m = output_side(n, 1, stride, 0);
-            let (x, padded) = input_and_padded(n, cin, &mut next);
+            let (x, padded) = input_and_padded(n, cin, Int8Range::Full, &mut next);
             let mask: Vec<bool> = (0..m * m * m)
                 .map(|o| o % 3 != 1 && !next().is_multiple_of(5))
                 .collect();
@@ -850,6 +965,18 @@ mod tests {
 
     #[test]
     fn the_tiles_give_the_exact_integer_sums() {
+        tiles_give_the_exact_integer_sums(Int8Range::Full);
+    }
+
+    /// Narrow bytes and weights: the same exact sums on every path (plain
+    /// AVX2 summing two `vpmaddubsw` pairs in i16), with the extreme bytes
+    /// and weights in the input.
+    #[test]
+    fn narrow_tiles_give_the_exact_integer_sums() {
+        tiles_give_the_exact_integer_sums(Int8Range::Narrow);
+    }
+
+    fn tiles_give_the_exact_integer_sums(range: Int8Range) {
         if !supported(normalnet_isa::Isa::detected()) {
             eprintln!("no AVX2 on this CPU: skipped");
             return;
@@ -867,9 +994,24 @@ mod tests {
             (64, 128, 1, 4),
             (128, 256, 2, 5),
         ] {
-            let q = Int8Conv::new(&conv(cin, cout, stride, cin as u32 + 5)).expect("layout fits");
+            let f = conv(cin, cout, stride, cin as u32 + 5);
+            let q = Int8Conv::new(&f, range).expect("layout fits");
+            let wmax = range.weight_max() as i8;
+            assert!(q.w.iter().all(|w| (-wmax..=wmax).contains(w)));
+            assert!(q.w.contains(&wmax) || q.w.contains(&-wmax));
             let m = output_side(n, 3, stride, 1);
-            let (x, padded) = input_and_padded(n, cin, &mut next);
+            let (mut x, _) = input_and_padded(n, cin, range, &mut next);
+            // the largest byte in runs, where the sums are largest
+            let top = range.activation_max() as u8;
+            for (i, b) in x.iter_mut().enumerate() {
+                if i % 97 < 24 {
+                    *b = top;
+                }
+            }
+            let padded: Vec<u8> = x
+                .chunks_exact(n * cin)
+                .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
+                .collect();
             // a mask with runs and gaps, rows with nothing to compute, and
             // a back half in D the kernel need not read
             let mask: Vec<bool> = (0..m * m * m)
@@ -891,7 +1033,7 @@ mod tests {
                 let got = on_every_path(&q, &padded, 0.01, n, &start, flags, Some(region));
                 assert!(
                     same_bits(&want, &got),
-                    "cin {cin} cout {cout} stride {stride} n {n}"
+                    "{range:?}: cin {cin} cout {cout} stride {stride} n {n}"
                 );
                 // rows it does not read may hold anything
                 let mut rows = vec![false; n * n];
@@ -921,6 +1063,7 @@ mod tests {
             &x,
             1,
             1,
+            Int8Range::Full,
             (None, Some(0.013)),
             &mut buffer,
         );
@@ -936,6 +1079,7 @@ mod tests {
             &x,
             2,
             1,
+            Int8Range::Full,
             (None, None),
             &mut buffer,
         );
@@ -955,6 +1099,7 @@ mod tests {
                 &[0.0; 8],
                 2,
                 0,
+                Int8Range::Full,
                 (None, None),
                 &mut buffer
             ),
@@ -969,8 +1114,31 @@ mod tests {
         bytes_scalar(&long, 1.0 / (max / 255.0), &mut scalar);
         // (every path: 1,000 values are 31 runs of 32 and a tail)
         for isa in normalnet_isa::Isa::all_here() {
-            let (q, s) = quantize(isa, &long, 10, 0, (None, None), &mut buffer);
+            let (q, s) = quantize(
+                isa,
+                &long,
+                10,
+                0,
+                Int8Range::Full,
+                (None, None),
+                &mut buffer,
+            );
             assert_eq!((q, s), (&scalar[..], max / 255.0), "{isa}");
+        }
+        // narrow: the maximum to 127, every byte ≤ 127, on every path
+        bytes_scalar(&long, 1.0 / (max / 127.0), &mut scalar);
+        assert!(scalar.iter().all(|&b| b <= 127) && scalar.contains(&127));
+        for isa in normalnet_isa::Isa::all_here() {
+            let (q, s) = quantize(
+                isa,
+                &long,
+                10,
+                0,
+                Int8Range::Narrow,
+                (None, None),
+                &mut buffer,
+            );
+            assert_eq!((q, s), (&scalar[..], max / 127.0), "{isa}");
         }
         // negative and not-a-number inputs saturate to 0 as the scalar cast does
         let odd: Vec<f32> = (0..64)

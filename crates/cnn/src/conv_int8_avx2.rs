@@ -16,14 +16,19 @@
 //!
 //! The narrower scheme `vpmaddubsw` (u8 × s8 pairs summed in i16) would
 //! double the products per instruction but saturates: 255·127 + 255·127 =
-//! 64,770 > 32,767, so its sums are not exact for these bytes.
+//! 64,770 > 32,767, so its sums are not exact for these bytes. With
+//! [`Int8Range::Narrow`] (bytes ≤ 127, weights within ±63) they are, and
+//! even two pairs add in i16 (4 · 127 · 63 = 32,004): plain AVX2 then
+//! reads the bytes and the VNNI weight layout as they are and does, per 64
+//! products, two `vpmaddubsw`, one `vpaddw` and one `vpmaddwd` by ones
+//! (`tile_sums_narrow`) where the widened form needs four `vpmaddwd`.
 //!
 //! 16 output channels (two vectors of 8) at a time, tiles of up to six
 //! neighbouring output cubes of a W row: 12 i32 chains, two weight vectors
 //! and one input broadcast in the 16 registers.
 
 use crate::conv::{Region, output_side, taps};
-use crate::conv_int8::{Int8Conv, for_each_tile};
+use crate::conv_int8::{Int8Conv, Int8Range, for_each_tile};
 use std::arch::x86_64::*;
 use std::cell::RefCell;
 
@@ -67,6 +72,19 @@ pub(crate) unsafe fn run(
             tile_sums_vnni::<4>,
             tile_sums_vnni::<5>,
             tile_sums_vnni::<6>,
+        ];
+        // SAFETY: the caller checked the features.
+        return unsafe { run_tiles(c, input, input_scale, n, out, flags, region, &tiles) };
+    }
+    // narrow bytes, input groups in pairs (8 channels): `vpmaddubsw`
+    if c.range() == Int8Range::Narrow && c.shape()[3].is_multiple_of(8) {
+        let tiles: [TileFn<u8>; MAX_TILE] = [
+            tile_sums_narrow::<1>,
+            tile_sums_narrow::<2>,
+            tile_sums_narrow::<3>,
+            tile_sums_narrow::<4>,
+            tile_sums_narrow::<5>,
+            tile_sums_narrow::<6>,
         ];
         // SAFETY: the caller checked the features.
         return unsafe { run_tiles(c, input, input_scale, n, out, flags, region, &tiles) };
@@ -311,6 +329,72 @@ unsafe fn tile_sums_of<M: GroupMac, const T: usize>(
                             );
                             for (a, &w) in a.iter_mut().zip(&wv) {
                                 *a = M::mac(*a, xv, w);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    sums[..T].copy_from_slice(&acc);
+}
+
+/// As [`tile_sums`] for narrow bytes (≤ 127) and weights (within ±63), on
+/// the bytes and the VNNI weight layout: per tap, pair of input groups (8
+/// channels) and cube, two `vpmaddubsw` (each lane: two u8 × s8 products,
+/// ≤ 2 · 127 · 63 = 16,002 in magnitude) added in i16 (≤ 32,004: exact),
+/// then `vpmaddwd` by ones adds the lane pairs into the i32 sums. The
+/// same products as the other kernels, summed exactly: the same sums.
+///
+/// # Safety
+/// The CPU has AVX2; the weights are narrow and the input bytes ≤ 127
+/// (else lanes saturate), input channels a multiple of 8.
+#[target_feature(enable = "avx2")]
+unsafe fn tile_sums_narrow<const T: usize>(
+    c: &Int8Conv,
+    input: &[u8],
+    n: usize,
+    [od, oh, ow, cb]: [usize; 4],
+    sums: &mut [[__m256i; V]; MAX_TILE],
+) {
+    let [k, s, p, cin, co, layout_pad] = c.shape();
+    let groups = cin / 4;
+    let padded = (n + 2 * layout_pad) * cin;
+    assert!(cb + BLOCK <= co && groups.is_multiple_of(2));
+    debug_assert_eq!(c.range(), Int8Range::Narrow);
+    let ones = _mm256_set1_epi16(1);
+    let mut acc = [[_mm256_setzero_si256(); V]; T];
+    for kd in taps(od, s, p, k, n) {
+        let id = od * s + kd - p;
+        for kh in taps(oh, s, p, k, n) {
+            let ih = oh * s + kh - p;
+            // position in the padded W row of output cube ow's tap kw
+            let start = (id * n + ih) * padded + (ow * s + layout_pad - p) * cin;
+            let x = &input[start..start + ((T - 1) * s + k) * cin];
+            let first = (kd * k + kh) * k;
+            let wt: *const u8 = c.tap_weights8(first..first + k).as_ptr().cast();
+            // SAFETY (all reads): as in `tile_sums_of` with four bytes per
+            // group, two groups g, g + 1 < groups at a time.
+            unsafe {
+                for kw in 0..k {
+                    for g in (0..groups).step_by(2) {
+                        let w0 = wt.add(((kw * groups + g) * co + cb) * 4);
+                        let w1 = w0.add(co * 4);
+                        let wv0: [__m256i; V] =
+                            std::array::from_fn(|v| _mm256_loadu_si256(w0.add(32 * v).cast()));
+                        let wv1: [__m256i; V] =
+                            std::array::from_fn(|v| _mm256_loadu_si256(w1.add(32 * v).cast()));
+                        let xg = x.as_ptr().add(kw * cin + 4 * g);
+                        for (t, a) in acc.iter_mut().enumerate() {
+                            let at = xg.add(t * s * cin);
+                            let x0 = _mm256_set1_epi32(at.cast::<i32>().read_unaligned());
+                            let x1 = _mm256_set1_epi32(at.add(4).cast::<i32>().read_unaligned());
+                            for v in 0..V {
+                                let pairs = _mm256_add_epi16(
+                                    _mm256_maddubs_epi16(x0, wv0[v]),
+                                    _mm256_maddubs_epi16(x1, wv1[v]),
+                                );
+                                a[v] = _mm256_add_epi32(a[v], _mm256_madd_epi16(pairs, ones));
                             }
                         }
                     }

@@ -29,6 +29,7 @@ mod stem_rows;
 mod train;
 mod weights;
 
+pub use conv_int8::Int8Range;
 pub use error::CnnError;
 pub use network::{Arithmetic, Cnn, LayerTimes};
 pub use normalnet_isa::Isa;

@@ -1,7 +1,7 @@
 //! `Cnn`: a compiled network — folded layers, forward pass over a batch.
 
 use crate::conv::{CubeMask, FoldedConv, Level, Region, SUPPORTED_CHANNELS};
-use crate::conv_int8::{self, Int8Conv};
+use crate::conv_int8::{self, Int8Conv, Int8Range};
 use crate::error::CnnError;
 use crate::sparse_conv::Occupied;
 use crate::stem_rows::{self, Int8Stem, Rows};
@@ -285,6 +285,8 @@ pub struct Cnn {
     row_stem: bool,
     /// the row stem in 8-bit integers, once [`Cnn::set_arithmetic`] asked for them
     stem_int8: Option<Int8Stem>,
+    /// the integer ranges of every int8 part ([`Cnn::set_int8_range`])
+    int8_range: Int8Range,
 }
 
 /// Activations of an all-empty grid: every cube whose receptive field holds
@@ -450,6 +452,7 @@ impl Cnn {
             int8: false,
             row_stem: false,
             stem_int8: None,
+            int8_range: Int8Range::Full,
         };
         cnn.set_row_stem(true);
         cnn.record_background();
@@ -530,18 +533,40 @@ impl Cnn {
         if arithmetic.int8 && conv_int8::supported(self.isa) {
             for b in &mut self.blocks {
                 if b.int8.is_none() {
-                    b.int8 = Int8Conv::new(&b.a).zip(Int8Conv::new(&b.b));
-                    b.shortcut_int8 = Int8Conv::new(&b.shortcut)
+                    let range = self.int8_range;
+                    b.int8 = Int8Conv::new(&b.a, range).zip(Int8Conv::new(&b.b, range));
+                    b.shortcut_int8 = Int8Conv::new(&b.shortcut, range)
                         .filter(|_| b.shortcut.k == 1 && b.shortcut.pad <= b.a.pad)
                         .map(|q| q.reading_layout(b.a.pad));
                 }
             }
             self.int8 = self.blocks.iter().all(|b| b.int8.is_some());
             if self.stem_int8.is_none() && stem_rows::serves(&self.stem, self.grid) {
-                self.stem_int8 = Int8Stem::new(&self.stem);
+                self.stem_int8 = Int8Stem::new(&self.stem, self.int8_range);
             }
         }
         self.arithmetic()
+    }
+
+    /// Sets the integer ranges of the int8 parts: what the network was
+    /// trained for ([`Int8Range::Full`] for a new network and the shipped
+    /// bundles). Parts already quantized are quantized again, and the
+    /// arithmetic asked for stays; returns the arithmetic in effect.
+    pub fn set_int8_range(&mut self, range: Int8Range) -> Arithmetic {
+        if range != self.int8_range {
+            self.int8_range = range;
+            for b in &mut self.blocks {
+                b.int8 = None;
+                b.shortcut_int8 = None;
+            }
+            self.stem_int8 = None;
+        }
+        self.set_arithmetic(self.asked)
+    }
+
+    /// The integer ranges of the int8 parts.
+    pub fn int8_range(&self) -> Int8Range {
+        self.int8_range
     }
 
     /// The arithmetic in effect: int8 blocks where asked and possible; the
@@ -783,7 +808,7 @@ impl Cnn {
                 let (p, g) = (self.stem.pad, self.grid);
                 match &self.stem_int8 {
                     Some(q) if int8 => {
-                        let scale = s.rows.quantize(&s.occupied);
+                        let scale = s.rows.quantize(&s.occupied, q.range());
                         // SAFETY (both): int8 precision means
                         // `conv_int8::supported` on this network's path (VNNI
                         // with F and BW, or AVX2 and FMA); `set_row_stem`
@@ -794,7 +819,8 @@ impl Cnn {
                             },
                             false => unsafe {
                                 let avx_vnni = self.isa.uses_avx_vnni();
-                                if !avx_vnni {
+                                // plain AVX2 reads narrow bytes as they are
+                                if !avx_vnni && q.range() == Int8Range::Full {
                                     s.rows.widen();
                                 }
                                 stem_rows::avx2::run_int8(
@@ -860,6 +886,7 @@ impl Cnn {
                             x,
                             n,
                             qa.input_pad(),
+                            qa.range(),
                             rows,
                             &mut s.quantized,
                         );
@@ -883,6 +910,7 @@ impl Cnn {
                             t,
                             m,
                             qb.input_pad(),
+                            qb.range(),
                             rows,
                             &mut s.quantized,
                         );

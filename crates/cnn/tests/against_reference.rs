@@ -2,7 +2,7 @@
 
 mod common;
 
-use normalnet_cnn::{Arithmetic, Cnn, CnnError, Isa, NetWeights};
+use normalnet_cnn::{Arithmetic, Cnn, CnnError, Int8Range, Isa, NetWeights};
 
 /// The fast forward pass on every kernel path this CPU runs (scalar, AVX2,
 /// AVX-512) equals the f64 reference.
@@ -236,6 +236,59 @@ fn the_int8_stem_is_opt_in_and_near_the_reference() {
         assert!(
             f64::from(worst) < INT8_TOLERANCE,
             "{} vs {}: {worst}",
+            pair[0].0,
+            pair[1].0
+        );
+    }
+}
+
+/// Every part in int8 with narrow ranges: the same outputs, bit for bit, on
+/// every path with int8 kernels (plain AVX2 with `vpmaddubsw`, AVX-VNNI,
+/// AVX-512 VNNI), near the reference (twice the full ranges' tolerance: half
+/// the steps), not those of the full ranges; back to full ranges, the full
+/// ranges' outputs again.
+#[test]
+fn narrow_int8_gives_the_same_outputs_on_every_path_near_the_reference() {
+    let (grid, batch) = (21, 6);
+    let w = common::random_net(7, grid, [16, 32, 64]);
+    let grids: Vec<f32> = (0..batch)
+        .flat_map(|i| common::sheet_grid(700 + i as u64, grid))
+        .collect();
+    let mut outputs: Vec<(Isa, Vec<f32>)> = Vec::new();
+    for isa in Isa::all_here().filter(|isa| isa.has_avx2()) {
+        let mut cnn = Cnn::new(&w).unwrap();
+        cnn.set_isa(isa).unwrap();
+        assert_eq!(cnn.int8_range(), Int8Range::Full);
+        if cnn.set_arithmetic(Arithmetic::INT8) != Arithmetic::INT8 {
+            eprintln!("no int8 kernels on {isa}: skipped");
+            return;
+        }
+        let mut full = vec![0.0f32; batch * 18];
+        cnn.forward(&grids, &mut full).unwrap();
+        assert_eq!(cnn.set_int8_range(Int8Range::Narrow), Arithmetic::INT8);
+        let mut out = vec![0.0f32; batch * 18];
+        cnn.forward(&grids, &mut out).unwrap();
+        assert_ne!(out, full, "{isa}: the narrow ranges did not run");
+        let worst = largest_difference_to_reference(&w, &cnn, &grids, &out);
+        println!("{isa}: narrow int8 vs f64: largest output difference {worst:e}");
+        assert!(
+            worst < 2.0 * INT8_TOLERANCE,
+            "{isa}: narrow int8 off by {worst}"
+        );
+        assert_eq!(cnn.set_int8_range(Int8Range::Full), Arithmetic::INT8);
+        let mut again = vec![0.0f32; batch * 18];
+        cnn.forward(&grids, &mut again).unwrap();
+        assert_eq!(again, full, "{isa}: full ranges again");
+        outputs.push((isa, out));
+    }
+    for pair in outputs.windows(2) {
+        assert!(
+            pair[0]
+                .1
+                .iter()
+                .zip(&pair[1].1)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "narrow int8: {} and {} differ",
             pair[0].0,
             pair[1].0
         );

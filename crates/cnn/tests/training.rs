@@ -6,7 +6,7 @@
 mod common;
 
 use common::{conv_ref, linear_ref};
-use normalnet_cnn::{BatchNormWeights, Loss, NetWeights, Trainer};
+use normalnet_cnn::{BatchNormWeights, Int8Range, Loss, NetWeights, Trainer};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -273,6 +273,74 @@ fn adam_lowers_the_loss_and_updates_running_statistics() {
     let mut out = vec![0.0f32; c.batch * 18];
     cnn.forward(&c.grids, &mut out).unwrap();
     assert!(out.iter().all(|v| v.is_finite()));
+}
+
+/// Quantization-aware training on the narrow int8 steps: the loss moves a
+/// little from the f32 network's and comes back with it off; every
+/// convolution's gradient points where the f32 one does (the rounding is
+/// passed straight through); Adam steps lower the loss; the weights kept and
+/// exported stay f32 (not on the steps).
+#[test]
+fn fake_quantization_trains_near_the_f32_network() {
+    let c = case(12, 15, [8, 16, 32], 16);
+    let mut t = Trainer::new(&c.w).unwrap();
+    let gradients = |t: &mut Trainer| {
+        t.zero_grad();
+        let l = t.forward_backward(&c.grids, &c.targets, Loss::Mse).unwrap();
+        (l, t.gradients())
+    };
+    let (f32_loss, mut f32_grads) = gradients(&mut t);
+    let f32_eval = t.loss(&c.grids, &c.targets, Loss::Mse).unwrap();
+    assert_eq!(t.fake_quant(), None);
+    t.set_fake_quant(Some(Int8Range::Narrow));
+    assert_eq!(t.fake_quant(), Some(Int8Range::Narrow));
+    let (q_loss, mut q_grads) = gradients(&mut t);
+    assert!(
+        q_loss != f32_loss && (q_loss - f32_loss).abs() < 0.05 * f32_loss,
+        "loss f32 {f32_loss}, narrow steps {q_loss}"
+    );
+    for ((name, a), (_, b)) in arrays(&mut f32_grads).into_iter().zip(arrays(&mut q_grads)) {
+        if !(name.contains("conv") || name.contains("shortcut") || name == "stem") {
+            continue;
+        }
+        let dot: f64 = a
+            .iter()
+            .zip(b.iter())
+            .map(|(x, y)| f64::from(*x) * f64::from(*y))
+            .sum();
+        let norm = |v: &[f32]| v.iter().map(|x| f64::from(*x).powi(2)).sum::<f64>().sqrt();
+        let cosine = dot / (norm(a) * norm(b));
+        // (0.74–0.86 on this case; unrelated directions would be near 0)
+        assert!(cosine > 0.6, "{name}: cosine {cosine}");
+        assert_ne!(a, b, "{name}: the rounding shows in the gradient");
+    }
+    // (batch norm's sums are shifted by its running mean, which the steps
+    // in between moved: equal to float rounding)
+    t.set_fake_quant(None);
+    let again = t.loss(&c.grids, &c.targets, Loss::Mse).unwrap();
+    assert!(
+        (again - f32_eval).abs() < 1e-6 * f32_eval,
+        "{again} vs {f32_eval}"
+    );
+    t.set_fake_quant(Some(Int8Range::Narrow));
+    let first = t.train_step(&c.grids, &c.targets, Loss::Mse, 1e-3).unwrap();
+    let mut last = first;
+    for _ in 0..10 {
+        last = t.train_step(&c.grids, &c.targets, Loss::Mse, 1e-3).unwrap();
+    }
+    assert!(last < 0.8 * first, "loss {first} → {last}");
+    // the f32 weights: a channel's weights are not all multiples of one step
+    let w = t.weights();
+    let conv = &w.blocks[1].conv_b;
+    let per_out = conv.weight.len() / conv.out_channels;
+    let channel = &conv.weight[..per_out];
+    let step = channel.iter().fold(0.0f32, |m, v| m.max(v.abs())) / 63.0;
+    assert!(
+        channel
+            .iter()
+            .any(|v| ((v / step) - (v / step).round()).abs() > 0.01),
+        "exported weights were rounded"
+    );
 }
 
 #[test]

@@ -14,7 +14,7 @@
 
 use std::path::{Path, PathBuf};
 
-use normalnet_cnn::{Arithmetic, Cnn, NetWeights};
+use normalnet_cnn::{Arithmetic, Cnn, Int8Range, NetWeights};
 use normalnet_voxel::VoxelParams;
 use serde::{Deserialize, Serialize};
 
@@ -61,6 +61,11 @@ pub struct Manifest {
     pub code_version: String,
     /// UTC time the bundle was written (seconds since the Unix epoch)
     pub created_unix: u64,
+    /// the integer ranges the networks' int8 parts run with: what they were
+    /// trained for (`full`, the default, or `narrow`: 7-bit block inputs
+    /// and 6-bit weights, which plain AVX2 sums twice as fast)
+    #[serde(default, skip_serializing_if = "is_full_range")]
+    pub int8_range: Int8Range,
     /// network architecture
     pub model: ModelConfig,
     /// voxel grid the networks read
@@ -80,6 +85,11 @@ pub struct Manifest {
     /// stage; `normalnet bench --suite` reproduces them)
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub evaluation: Option<Evaluation>,
+}
+
+/// The manifest leaves out the default ranges.
+fn is_full_range(range: &Int8Range) -> bool {
+    *range == Int8Range::Full
 }
 
 /// Which recipe built a bundle, and from what code.
@@ -388,7 +398,8 @@ impl Bundle {
                     w.grid, manifest.model.grid
                 )));
             }
-            let cnn = Cnn::new(w).map_err(|e| mismatch(e.to_string()))?;
+            let mut cnn = Cnn::new(w).map_err(|e| mismatch(e.to_string()))?;
+            cnn.set_int8_range(manifest.int8_range);
             if cnn.outputs() != manifest.model.outputs {
                 return Err(mismatch(format!(
                     "{} outputs, the manifest says {}",
@@ -464,6 +475,7 @@ pub fn new_manifest(preset: &str) -> Result<Manifest, NetError> {
         mu_gs: MU_GS.to_vec(),
         intervals: Manifest::default_intervals(),
         code_version: code_version(),
+        int8_range: Int8Range::Full,
         created_unix: std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.as_secs())
@@ -568,6 +580,42 @@ mod tests {
         let text = std::fs::read_to_string(dir.path().join(MANIFEST)).unwrap();
         let from_bytes = Bundle::from_bytes("<memory>", &text, &refs).unwrap();
         assert_eq!(from_bytes.networks, bundle.networks);
+    }
+
+    /// `int8_range` is left out for full ranges, read back as written, set on
+    /// every engine, and an unknown range is refused naming the manifest.
+    #[test]
+    fn the_int8_range_is_written_read_and_set_on_every_network() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut manifest = tiny_bundle(dir.path());
+        let path = dir.path().join(MANIFEST);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(!text.contains("int8_range"), "full ranges are the default");
+        let bundle = Bundle::load(dir.path()).unwrap();
+        assert!(
+            bundle
+                .engines
+                .iter()
+                .all(|e| e.int8_range() == Int8Range::Full)
+        );
+        manifest.int8_range = Int8Range::Narrow;
+        manifest.write(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("int8_range = \"narrow\""), "{text}");
+        let bundle = Bundle::load(dir.path()).unwrap();
+        assert_eq!(bundle.manifest, manifest);
+        assert!(
+            bundle
+                .engines
+                .iter()
+                .all(|e| e.int8_range() == Int8Range::Narrow)
+        );
+        std::fs::write(&path, text.replace("\"narrow\"", "\"wide\"")).unwrap();
+        let err = Bundle::load(dir.path()).unwrap_err().to_string();
+        assert!(
+            err.contains("manifest.toml") && err.contains("wide"),
+            "{err}"
+        );
     }
 
     #[test]

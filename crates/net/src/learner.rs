@@ -8,7 +8,7 @@ use std::path::Path;
 
 #[cfg(feature = "burn")]
 use burn::{module::Module, optim::ModuleOptimizer, tensor::Device};
-use normalnet_cnn::{Cnn, Loss, NetWeights, Trainer};
+use normalnet_cnn::{Int8Range, Loss, NetWeights, Trainer};
 
 use crate::NetError;
 use crate::arch::ModelConfig;
@@ -71,19 +71,24 @@ fn record(path: &Path, e: impl ToString) -> NetError {
 }
 
 impl Learner {
-    /// Starts from the weights `w` of a `config` network.
+    /// Starts from the weights `w` of a `config` network; with `quant`,
+    /// trains on those int8 steps ([`Trainer::set_fake_quant`]; the cnn
+    /// engine only, as the training config checks).
     pub(crate) fn new(
         engine: Engine,
         w: &NetWeights,
         config: &ModelConfig,
         loss: Loss,
+        quant: Option<Int8Range>,
     ) -> Result<Learner, NetError> {
         let _ = config;
         Ok(match engine {
-            Engine::Cnn => Learner::Cnn {
-                trainer: Box::new(Trainer::new(w).map_err(|e| record(Path::new("<model>"), e))?),
-                loss,
-            },
+            Engine::Cnn => {
+                let mut trainer =
+                    Box::new(Trainer::new(w).map_err(|e| record(Path::new("<model>"), e))?);
+                trainer.set_fake_quant(quant);
+                Learner::Cnn { trainer, loss }
+            }
             #[cfg(feature = "burn")]
             Engine::Burn => {
                 let net = crate::import::normal_net(config, w, &Device::flex())
@@ -136,11 +141,6 @@ impl Learner {
                     .map_err(|e| record(Path::new("<model>"), e))
             }
         }
-    }
-
-    /// The current network compiled for the CPU inference engine.
-    pub(crate) fn compiled(&self, config: &ModelConfig) -> Result<Cnn, NetError> {
-        Cnn::new(&self.network(config)?).map_err(|e| record(Path::new("<model>"), e))
     }
 
     /// Saves the network as a bundle file.

@@ -41,5 +41,5 @@ pub use bundle::{Bundle, Manifest};
 pub use error::NetError;
 #[cfg(feature = "burn")]
 pub use model::NormalNet;
-pub use normalnet_cnn::Arithmetic;
+pub use normalnet_cnn::{Arithmetic, Int8Range};
 pub use pipeline::{DenoiseParams, StageTimes, denoise};

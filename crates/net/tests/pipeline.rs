@@ -4,7 +4,7 @@
 
 use normalnet_mesh::NoProgress;
 use normalnet_net::training::{SourceSpec, TrainConfig, train};
-use normalnet_net::{Bundle, DenoiseParams, denoise};
+use normalnet_net::{Bundle, DenoiseParams, Int8Range, denoise};
 
 /// A training source: `mesh` with Gaussian noise of `level`.
 fn source(mesh: &str, level: f64) -> SourceSpec {
@@ -84,6 +84,41 @@ fn tiny_training_writes_a_bundle_that_denoises() {
     // a second call with --resume on a finished run changes nothing
     let again = train(&config, dir.path(), true, &NoProgress).unwrap();
     assert_eq!(again.networks, manifest.networks);
+}
+
+/// Quantization-aware training (`int8_range = "narrow"`): the bundle says
+/// so, its networks run the narrow ranges, and it denoises; the burn
+/// engine cannot train it.
+#[test]
+fn narrow_int8_training_writes_a_narrow_bundle() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = TrainConfig {
+        int8_range: Int8Range::Narrow,
+        ..tiny_config()
+    };
+    assert_eq!(config.fake_quant(), Some(Int8Range::Narrow));
+    let manifest = train(&config, dir.path(), false, &NoProgress).unwrap();
+    assert_eq!(manifest.int8_range, Int8Range::Narrow);
+    let bundle = Bundle::load(dir.path()).unwrap();
+    assert!(
+        bundle
+            .engines
+            .iter()
+            .all(|e| e.int8_range() == Int8Range::Narrow)
+    );
+    let mesh = normalnet_voxel::shapes::generate_seeded(7, 150).unwrap();
+    let params = DenoiseParams {
+        iterations: 2,
+        vertex_iterations: 5,
+        ..DenoiseParams::default()
+    };
+    let (out, _) = denoise(&mesh, &bundle, &params, &NoProgress).unwrap();
+    assert!(out.positions.iter().flatten().all(|x| x.is_finite()));
+    let burn = TrainConfig {
+        engine: "burn".into(),
+        ..config
+    };
+    assert!(burn.validate(std::path::Path::new("narrow.toml")).is_err());
 }
 
 #[test]

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use normalnet_denoise::normalnet::NormalnetParams;
 use normalnet_net::Bundle;
+use normalnet_net::Int8Range;
 
 /// Arguments of `normalnet models`.
 #[derive(clap::Args)]
@@ -50,6 +51,7 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     if args.json {
         let mut v = serde_json::to_value(&bundle.manifest)?;
         v["isa"] = normalnet_denoise::isa::active().name().into();
+        v["int8_range"] = bundle.manifest.int8_range.name().into();
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
     } else {
         write!(out, "{}", describe(&bundle))?;
@@ -91,6 +93,14 @@ pub fn describe(bundle: &Bundle) -> String {
         m.voxel.t_s, m.voxel.alpha_c, m.mu_gs
     ));
     line(format!("code        {}", m.code_version));
+    line(format!(
+        "int8        {} ranges ({})",
+        m.int8_range.name(),
+        match m.int8_range {
+            Int8Range::Full => "block inputs 0..=255, weights ±127, stem inputs ±127",
+            Int8Range::Narrow => "block inputs 0..=127, weights ±63, stem inputs ±63",
+        }
+    ));
     line(format!(
         "training    {} sources, validation on {}; seed {}, batch {}",
         m.training.sources.len(),

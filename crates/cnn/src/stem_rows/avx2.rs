@@ -18,12 +18,17 @@
 //! bit. Per cube and row: 8 input pairs × 2 vectors = 16 `vpmaddwd` (VNNI:
 //! 4 `vpdpbusd`), in tiles of up to 6 cubes (12 i32 chains). With AVX-VNNI
 //! (`Isa::AvxVnni`) the same tiles read the bytes and the VNNI weights:
-//! 4 groups × 2 vectors = 8 256-bit `vpdpbusd` per cube and row.
+//! 4 groups × 2 vectors = 8 256-bit `vpdpbusd` per cube and row. With
+//! [`Int8Range::Narrow`] (bytes 1 ..= 127, weights within ±63) plain AVX2
+//! reads the bytes too: per pair of groups, two `vpmaddubsw` added in i16
+//! (≤ 4 · 127 · 63 = 32,004: exact) and one `vpmaddwd` by ones, 12
+//! multiply instructions per cube and row instead of 16.
 
 use super::{
     CHUNK, CIN, CO, CubeMask, FoldedConv, Int8Stem, K, Rows, SLACK, WINDOW, background,
     for_each_span, serves,
 };
+use crate::conv_int8::Int8Range;
 use std::arch::x86_64::*;
 
 /// Input pairs of a W window (15 bytes and a zero).
@@ -120,8 +125,9 @@ pub(crate) unsafe fn run(
 
 /// [`super::run_int8`] on AVX2, on rows quantized by [`Rows::quantize`]
 /// with scale `input_scale` and widened by [`Rows::widen`]; with
-/// `avx_vnni`, on the bytes themselves with 256-bit `vpdpbusd` (not
-/// widened: the same sums). Returns the largest value of `out`.
+/// `avx_vnni`, on the bytes themselves with 256-bit `vpdpbusd`, and for a
+/// narrow `q`, on the bytes with `vpmaddubsw` (neither widened: the same
+/// sums). Returns the largest value of `out`.
 ///
 /// # Safety
 /// The CPU must have AVX2 and FMA (and AVX-VNNI with `avx_vnni`), and
@@ -141,8 +147,9 @@ pub(crate) unsafe fn run_int8(
 ) -> f32 {
     let m = crate::conv::output_side(n, K, 1, p);
     assert!(rows.len >= m + K - 1);
+    let narrow = !avx_vnni && q.range() == Int8Range::Narrow;
     assert!(
-        avx_vnni || rows.wide.len() == rows.row_bytes() + SLACK,
+        avx_vnni || narrow || rows.wide.len() == rows.row_bytes() + SLACK,
         "rows not quantized and widened"
     );
     let finish = Finish {
@@ -174,6 +181,8 @@ pub(crate) unsafe fn run_int8(
                         $($t => unsafe {
                             if avx_vnni {
                                 stem_tile_vnni::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
+                            } else if narrow {
+                                stem_tile_narrow::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
                             } else {
                                 stem_tile::<$t>(q, rows, c0, reach, &finish, cubes, &mut largest)
                             }
@@ -304,6 +313,67 @@ unsafe fn stem_tile_vnni<const T: usize>(
                     let xv = _mm256_set1_epi32(group);
                     a[0] = _mm256_dpbusd_avx_epi32(a[0], xv, wv[0]);
                     a[1] = _mm256_dpbusd_avx_epi32(a[1], xv, wv[1]);
+                }
+            }
+        }
+    }
+    finish_tile(acc, offset, finish, out, largest);
+}
+
+/// As [`stem_tile_vnni`] on plain AVX2 for a narrow stem (bytes ≤ 127,
+/// weights within ±63): per row, pair of window groups and cube, two
+/// `vpmaddubsw` added in i16 (exact, see the module) and one `vpmaddwd` by
+/// ones into the i32 sums, per half of the output channels.
+///
+/// # Safety
+/// The CPU has AVX2 and FMA; `rows` is quantized to `q`'s narrow range,
+/// and `c0 + T + K − 1 ≤ rows.len`.
+#[target_feature(enable = "avx2,fma")]
+unsafe fn stem_tile_narrow<const T: usize>(
+    q: &Int8Stem,
+    rows: &Rows,
+    c0: usize,
+    reach: &[(usize, usize, u64)],
+    finish: &Finish,
+    out: &mut [f32],
+    largest: &mut [__m256; 2],
+) {
+    const { assert!(T <= MAX_TILE && (WINDOW / 4).is_multiple_of(2)) };
+    debug_assert!(c0 + T + K - 1 <= rows.len && out.len() == T * CO);
+    debug_assert_eq!(q.range(), Int8Range::Narrow);
+    let tile = ((1u64 << T) - 1) << c0;
+    let ones = _mm256_set1_epi16(1);
+    let mut acc = [[_mm256_setzero_si256(); 2]; T];
+    let mut offset = [_mm256_setzero_si256(); 2];
+    // rows with no occupied cube near this tile add only zeros
+    for &(x0, tap_row, _) in reach.iter().filter(|r| r.2 & tile != 0) {
+        // SAFETY: as in `stem_tile_vnni`, two groups g, g + 1 < WINDOW / 4
+        // at a time.
+        unsafe {
+            let w = q.w.as_ptr().add(tap_row * WINDOW * CO);
+            add_row_offset(q, tap_row, &mut offset);
+            let x = rows.bytes.as_ptr().add(CIN * (x0 + c0));
+            for g in (0..WINDOW / 4).step_by(2) {
+                let (w0, w1) = (w.add(g * CO * 4), w.add((g + 1) * CO * 4));
+                let wv0 = [
+                    _mm256_loadu_si256(w0.cast()),
+                    _mm256_loadu_si256(w0.add(32).cast()),
+                ];
+                let wv1 = [
+                    _mm256_loadu_si256(w1.cast()),
+                    _mm256_loadu_si256(w1.add(32).cast()),
+                ];
+                for (t, a) in acc.iter_mut().enumerate() {
+                    let at = x.add(CIN * t + 4 * g);
+                    let x0 = _mm256_set1_epi32(at.cast::<i32>().read_unaligned());
+                    let x1 = _mm256_set1_epi32(at.add(4).cast::<i32>().read_unaligned());
+                    for h in 0..2 {
+                        let pairs = _mm256_add_epi16(
+                            _mm256_maddubs_epi16(x0, wv0[h]),
+                            _mm256_maddubs_epi16(x1, wv1[h]),
+                        );
+                        a[h] = _mm256_add_epi32(a[h], _mm256_madd_epi16(pairs, ones));
+                    }
                 }
             }
         }

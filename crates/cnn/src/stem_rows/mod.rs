@@ -31,6 +31,7 @@
 pub(crate) mod avx2;
 
 use crate::conv::{CubeMask, FoldedConv};
+use crate::conv_int8::Int8Range;
 use crate::sparse_conv::Occupied;
 
 /// Output cubes per register block: 7 accumulators, 15 weights and the
@@ -114,20 +115,22 @@ impl Rows {
 
     /// The rows in bytes for [`run_int8`], from the `occupied` cubes
     /// [`Rows::build`] laid out; returns the scale s (value ≈ (byte − 128) ·
-    /// s, s = largest |value| / 127, 1 for an all-zero grid).
-    pub(crate) fn quantize(&mut self, occupied: &Occupied) -> f32 {
+    /// s, s = largest |value| / 127, 1 for an all-zero grid; `range` narrow:
+    /// (byte − 64) · s, s = largest |value| / 63).
+    pub(crate) fn quantize(&mut self, occupied: &Occupied, range: Int8Range) -> f32 {
         assert_eq!(
             occupied.index.len(),
             self.cubes.len(),
             "rows built from these cubes"
         );
         let max = occupied.values.iter().fold(0.0f32, |m, v| m.max(v.abs()));
-        let scale = if max > 0.0 { max / 127.0 } else { 1.0 };
+        let (top, zero) = range.stem_levels();
+        let scale = if max > 0.0 { max / top as f32 } else { 1.0 };
         let inv = 1.0 / scale;
-        let byte = |v: f32| round_half_even(v * inv).clamp(-127, 127) + 128;
-        // every cube 128 (zero) but the occupied ones
+        let byte = |v: f32| round_half_even(v * inv).clamp(-top, top) + zero;
+        // every cube zero (the byte 128, narrow 64) but the occupied ones
         self.bytes.clear();
-        self.bytes.resize(self.row_bytes() + SLACK, 128);
+        self.bytes.resize(self.row_bytes() + SLACK, zero as u8);
         for (&at, values) in self.cubes.iter().zip(occupied.values.chunks_exact(CIN)) {
             let at = at as usize * CIN;
             for (b, &v) in self.bytes[at..at + CIN].iter_mut().zip(values) {
@@ -196,24 +199,29 @@ pub(crate) struct Int8Stem {
     w: Vec<i8>,
     /// per output channel: f32 weight = byte · scale
     scale: Vec<f32>,
-    /// per (kd, kh) and output channel: 128 · Σ over kw and channels of the
-    /// bytes — what the +128 offset of the inputs adds to a sum over one row
+    /// per (kd, kh) and output channel: 128 (narrow: 64) · Σ over kw and
+    /// channels of the bytes — what the offset of the inputs' zero byte
+    /// adds to a sum over one row
     offset: Vec<i32>,
     bias: Vec<f32>,
     /// the same weights as i16 pairs for [`avx2::run_int8`]: per (kd, kh),
     /// the window's bytes `2g` and `2g + 1` for each output channel,
     /// `[kd·K + kh][WINDOW / 2][co][2]`
     w16: Vec<i16>,
+    /// the integer ranges of its weights and input bytes
+    range: Int8Range,
 }
 
 impl Int8Stem {
-    /// Quantizes the stem `c`; `None` where [`run`] does not serve it.
-    pub(crate) fn new(c: &FoldedConv) -> Option<Int8Stem> {
+    /// Quantizes the stem `c` to `range`; `None` where [`run`] does not
+    /// serve it.
+    pub(crate) fn new(c: &FoldedConv, range: Int8Range) -> Option<Int8Stem> {
         if c.k != K || c.cin != CIN || c.cout != CO || c.stride != 1 {
             return None;
         }
         const { assert!(K * CIN < WINDOW) };
-        let scale = crate::conv_int8::weight_scales(c);
+        let scale = crate::conv_int8::weight_scales(&c.w, c.cout, range);
+        let (wmax, zero) = (range.weight_max(), range.stem_levels().1);
         let mut w = vec![0i8; K * K * WINDOW * CO];
         let mut offset = vec![0i32; K * K * CO];
         for tap in 0..K * K * K {
@@ -222,9 +230,9 @@ impl Int8Stem {
                 for co in 0..CO {
                     let q = (c.w[(tap * CIN + ci) * CO + co] / scale[co])
                         .round()
-                        .clamp(-127.0, 127.0) as i8;
+                        .clamp(-wmax, wmax) as i8;
                     w[weight_index(tap, ci, co)] = q;
-                    offset[row * CO + co] += 128 * i32::from(q);
+                    offset[row * CO + co] += zero * i32::from(q);
                 }
             }
         }
@@ -246,7 +254,14 @@ impl Int8Stem {
             offset,
             bias: c.b.clone(),
             w16,
+            range,
         })
+    }
+
+    /// The integer ranges it was quantized to (its rows must be
+    /// [`Rows::quantize`]d to the same).
+    pub(crate) fn range(&self) -> Int8Range {
+        self.range
     }
 
     /// The byte of the weight of tap `(kd·K + kh)·K + kw`, input channel
@@ -701,10 +716,13 @@ mod tests {
             eprintln!("skipped: no AVX-512 VNNI on this CPU");
             return;
         }
-        for n in SIDES {
+        for (n, range) in SIDES
+            .into_iter()
+            .flat_map(|n| [(n, Int8Range::Full), (n, Int8Range::Narrow)])
+        {
             let (c, occ, mut rows, m) = stem_and_grid(n);
-            let s = rows.quantize(&occ);
-            let q = Int8Stem::new(&c).expect("a 3 → 16 stem");
+            let s = rows.quantize(&occ, range);
+            let q = Int8Stem::new(&c, range).expect("a 3 → 16 stem");
             // the values the bytes stand for
             let mut rounded = c.clone();
             for (r, w) in rounded.w.iter_mut().enumerate() {
@@ -746,7 +764,15 @@ mod tests {
                     worst = worst.max((g - e).abs());
                 }
                 // inputs in ±0.5, weights in ±0.5, up to 375 products
-                assert!(worst > 0.0 && worst < 0.05, "n {n}: int8 vs f32 {worst}");
+                // (narrow: steps twice as coarse each way)
+                let bound = match range {
+                    Int8Range::Full => 0.05,
+                    Int8Range::Narrow => 0.2,
+                };
+                assert!(
+                    worst > 0.0 && worst < bound,
+                    "{range:?}, n {n}: int8 vs f32 {worst}"
+                );
             }
         }
     }
@@ -798,16 +824,40 @@ mod tests {
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn int8_rows_on_avx2_give_the_exact_integer_sums() {
+        int8_rows_on_avx2_exact(Int8Range::Full);
+    }
+
+    /// As above for a narrow stem (plain AVX2 on the bytes with
+    /// `vpmaddubsw`): the same exact sums on every path.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn narrow_int8_rows_on_avx2_give_the_exact_integer_sums() {
+        int8_rows_on_avx2_exact(Int8Range::Narrow);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    fn int8_rows_on_avx2_exact(range: Int8Range) {
         let isa = normalnet_isa::Isa::detected();
         if !isa.has_avx2() {
             eprintln!("skipped: no AVX2 on this CPU");
             return;
         }
+        let zero = range.stem_levels().1;
         for n in SIDES {
             let (c, occ, mut rows, m) = stem_and_grid(n);
-            let s = rows.quantize(&occ);
-            rows.widen();
-            let q = Int8Stem::new(&c).expect("a 3 → 16 stem");
+            let s = rows.quantize(&occ, range);
+            if range == Int8Range::Full {
+                rows.widen();
+            }
+            let q = Int8Stem::new(&c, range).expect("a 3 → 16 stem");
+            let wmax = range.weight_max() as i8;
+            assert!(q.w.iter().all(|w| (-wmax..=wmax).contains(w)));
+            let top = 2 * zero - 1;
+            assert!(
+                rows.bytes
+                    .iter()
+                    .all(|&b| (1..=top).contains(&i32::from(b)))
+            );
             for relu in [false, true] {
                 let floor = if relu { 0.0 } else { f32::NEG_INFINITY };
                 let mut want = vec![f32::NAN; m * m * m * 16];
@@ -830,7 +880,7 @@ mod tests {
                                     let b = i32::from(rows.bytes[(x0 + ow + kw) * CIN + ci]);
                                     for (co, sum) in sums.iter_mut().enumerate() {
                                         let tap = (kd * K + kh) * K + kw;
-                                        *sum += (b - 128) * i32::from(q.weight(tap, ci, co));
+                                        *sum += (b - zero) * i32::from(q.weight(tap, ci, co));
                                     }
                                 }
                             }

@@ -15,11 +15,13 @@
 
 mod batch_norm;
 mod conv_grad;
+mod fake_quant;
 mod param;
 
 use rayon::prelude::*;
 
 use crate::conv::{FoldedConv, Level, SUPPORTED_CHANNELS};
+use crate::conv_int8::Int8Range;
 use crate::error::CnnError;
 use crate::sparse_conv::Occupied;
 use crate::weights::{BlockWeights, ConvWeights, LinearWeights, NetWeights};
@@ -47,13 +49,14 @@ pub enum Loss {
 
 /// A convolution being trained: weights `[k³][cin][cout]` (the forward
 /// kernels' layout) and their transpose `[k³][cout][cin]` for the input
-/// gradient.
+/// gradient; with `quant`, both on the int8 steps of that range.
 #[derive(Clone, Debug)]
 struct Conv {
     sh: ConvShape,
     p: Param,
     folded: FoldedConv,
     wt: Vec<f32>,
+    quant: Option<Int8Range>,
 }
 
 impl Conv {
@@ -97,20 +100,25 @@ impl Conv {
             p: Param::new(folded.w.clone()),
             folded,
             wt: Vec::new(),
+            quant: None,
         };
         conv.refresh();
         Ok(conv)
     }
 
-    /// Copies the parameter values into the kernels' arrays.
+    /// Copies the parameter values (with `quant`, rounded to its steps)
+    /// into the kernels' arrays.
     fn refresh(&mut self) {
-        self.folded.w.copy_from_slice(&self.p.value);
+        match self.quant {
+            Some(range) => self.folded.w = fake_quant::weights(&self.p.value, self.sh.cout, range),
+            None => self.folded.w.copy_from_slice(&self.p.value),
+        }
         let (k3, ci, co) = (self.sh.k.pow(3), self.sh.cin, self.sh.cout);
         self.wt.resize(k3 * ci * co, 0.0);
         for t in 0..k3 {
             for i in 0..ci {
                 for o in 0..co {
-                    self.wt[(t * co + o) * ci + i] = self.p.value[(t * ci + i) * co + o];
+                    self.wt[(t * co + o) * ci + i] = self.folded.w[(t * ci + i) * co + o];
                 }
             }
         }
@@ -295,8 +303,13 @@ struct Block {
 /// Activations of one block for a batch (`[samples][m³][c]`).
 #[derive(Default)]
 struct BlockCache {
+    /// with fake quantization: the block's input on its int8 steps (what
+    /// conv a and the shortcut read)
+    xq: Vec<f32>,
     za: Vec<f32>,
     aa: Vec<f32>,
+    /// with fake quantization: `aa` on its int8 steps (what conv b reads)
+    aaq: Vec<f32>,
     zb: Vec<f32>,
     zs: Vec<f32>,
     out: Vec<f32>,
@@ -366,6 +379,9 @@ pub struct Trainer {
     output: Linear,
     cache: Cache,
     prof: Profile,
+    /// quantization-aware training: the int8 steps every convolution's
+    /// weights and inputs are rounded to in the forward pass
+    quant: Option<Int8Range>,
 }
 
 /// `y = relu(scale·z + shift)` per channel, in parallel over samples.
@@ -457,6 +473,7 @@ impl Trainer {
             output: Linear::new(&weights.output, "output")?,
             cache: Cache::default(),
             prof: Profile::default(),
+            quant: None,
         })
     }
 
@@ -552,6 +569,30 @@ impl Trainer {
         }
         v.extend([&mut self.output.w, &mut self.output.b]);
         v
+    }
+
+    /// Quantization-aware training: with `Some(range)`, the forward pass
+    /// rounds every convolution's weights (per output channel) and inputs
+    /// (per sample: the stem's signed values, the blocks' inputs) to the
+    /// steps the int8 inference uses with `range`, and gradients pass the
+    /// rounding straight through; `None` (a new trainer's): f32 throughout.
+    /// The weights kept and exported stay f32.
+    pub fn set_fake_quant(&mut self, range: Option<Int8Range>) {
+        self.quant = range;
+        let convs = std::iter::once(&mut self.stem).chain(
+            self.blocks
+                .iter_mut()
+                .flat_map(|b| [&mut b.a, &mut b.b, &mut b.s]),
+        );
+        for conv in convs {
+            conv.quant = range;
+            conv.refresh();
+        }
+    }
+
+    /// The int8 steps of quantization-aware training, if on.
+    pub fn fake_quant(&self) -> Option<Int8Range> {
+        self.quant
     }
 
     /// Switches the per-phase timing on or off (and clears it).
@@ -754,10 +795,16 @@ impl Trainer {
         c.samples = samples;
         let g = 3 * self.grid.pow(3);
         c.occupied.resize_with(samples, Occupied::default);
+        let quant = self.quant;
         c.occupied
             .par_iter_mut()
             .zip(grids.par_chunks(g))
-            .for_each(|(o, grid)| o.gather(grid, 3));
+            .for_each(|(o, grid)| {
+                o.gather(grid, 3);
+                if let Some(range) = quant {
+                    fake_quant::stem_inputs(&mut o.values, range);
+                }
+            });
         // stem
         let n = self.stem_side;
         let per = n * n * n * self.stem.sh.cout;
@@ -782,6 +829,14 @@ impl Trainer {
             for v in [&mut bc.za, &mut bc.aa, &mut bc.zb, &mut bc.zs, &mut bc.out] {
                 v.resize(samples * per, 0.0);
             }
+            let x: &[f32] = match quant {
+                Some(range) => {
+                    bc.xq.resize(x.len(), 0.0);
+                    fake_quant::block_inputs(x, xs, range, &mut bc.xq);
+                    &bc.xq
+                }
+                None => x,
+            };
             let (ca, cs) = (&b.a.folded, &b.s.folded);
             bc.za
                 .par_chunks_mut(per)
@@ -793,10 +848,18 @@ impl Trainer {
                 });
             bc.st_a = b.bn_a.stats(&bc.za, samples, update);
             bn_relu(&bc.za, &bc.st_a, &mut bc.aa, per);
+            let aa: &[f32] = match quant {
+                Some(range) => {
+                    bc.aaq.resize(bc.aa.len(), 0.0);
+                    fake_quant::block_inputs(&bc.aa, per, range, &mut bc.aaq);
+                    &bc.aaq
+                }
+                None => &bc.aa,
+            };
             let cb = &b.b.folded;
             bc.zb
                 .par_chunks_mut(per)
-                .zip(bc.aa.par_chunks(per))
+                .zip(aa.par_chunks(per))
                 .for_each(|(zb, aa)| cb.run(lv, aa, m, zb, false, false, None));
             bc.st_b = b.bn_b.stats(&bc.zb, samples, update);
             bc.st_s = b.bn_s.stats(&bc.zs, samples, update);
@@ -931,10 +994,12 @@ impl Trainer {
         for bi in (0..self.blocks.len()).rev() {
             let bc = &c.blocks[bi];
             let b = &mut self.blocks[bi];
-            let x: &[f32] = if bi == 0 {
-                &c.a0
-            } else {
-                &c.blocks[bi - 1].out
+            // the inputs the forward pass read (with fake quantization, on
+            // their steps; the gradients pass the rounding straight through)
+            let (x, aa): (&[f32], &[f32]) = match self.quant {
+                Some(_) => (&bc.xq, &bc.aaq),
+                None if bi == 0 => (&c.a0, &bc.aa),
+                None => (&c.blocks[bi - 1].out, &bc.aa),
             };
             relu_mask(&mut d_out, &bc.out);
             let mut d_zs = d_out.clone();
@@ -942,7 +1007,7 @@ impl Trainer {
                 .backward(&bc.st_b, &bc.zb, &mut d_out, samples, false);
             b.bn_s.backward(&bc.st_s, &bc.zs, &mut d_zs, samples, false);
             let mut d_aa = vec![0.0f32; bc.aa.len()];
-            b.b.backward(lv, &bc.aa, b.m, &d_out, samples, Some(&mut d_aa), false);
+            b.b.backward(lv, aa, b.m, &d_out, samples, Some(&mut d_aa), false);
             b.bn_a.backward(&bc.st_a, &bc.za, &mut d_aa, samples, true);
             let mut d_x = vec![0.0f32; x.len()];
             b.a.backward(lv, x, b.n, &d_aa, samples, Some(&mut d_x), false);

@@ -122,7 +122,12 @@ fn the_shipped_recipes_load() {
         );
         return;
     }
-    for name in ["lite.toml", "lite-heavy-switch.toml", "smoke.toml"] {
+    for name in [
+        "lite.toml",
+        "lite-heavy-switch.toml",
+        "lite-narrow.toml",
+        "smoke.toml",
+    ] {
         let r = Recipe::load(&recipes.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(r.stages.iter().any(|s| s.kind() == "evaluate"), "{name}");
         r.hash().unwrap();

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use normalnet_cnn::Loss;
+use normalnet_cnn::{Arithmetic, Cnn, CnnError, Int8Range, Loss, NetWeights};
 use normalnet_mesh::NoiseParams;
 use normalnet_voxel::VoxelParams;
 use serde::{Deserialize, Serialize};
@@ -118,6 +118,12 @@ pub struct TrainConfig {
     /// §5 scale note; 1 = the preset, ≈ 1.8 = the paper's implied extent).
     /// The bundle records the resulting `α_c/κ` as its `voxel.alpha_c`.
     pub voxel_scale: f64,
+    /// the int8 ranges the bundle runs with: `full` (the default: the
+    /// networks train in f32) or `narrow` (quantization-aware training: the
+    /// forward pass rounds weights and activations to the narrow int8 steps,
+    /// validation and regeneration run the narrow int8 inference, and the
+    /// manifest says `int8_range = "narrow"`; `cnn` engine only)
+    pub int8_range: Int8Range,
 }
 
 impl Default for TrainConfig {
@@ -149,6 +155,7 @@ impl Default for TrainConfig {
             init_from: String::new(),
             first_network: 1,
             voxel_scale: 1.0,
+            int8_range: Int8Range::Full,
         }
     }
 }
@@ -203,6 +210,11 @@ impl TrainConfig {
         }
         if engine == Engine::Burn && loss != Loss::Mse {
             return Err(bad("the burn engine trains with loss = \"mse\" only".into()));
+        }
+        if engine == Engine::Burn && self.fake_quant().is_some() {
+            return Err(bad(
+                "int8_range = \"narrow\" trains on the cnn engine only".into()
+            ));
         }
         if !(self.voxel_scale > 0.0 && self.voxel_scale.is_finite()) {
             return Err(bad(format!(
@@ -296,6 +308,24 @@ impl TrainConfig {
     /// Whether network `k` (0-based) predicts residuals.
     pub fn residual(&self, k: usize) -> bool {
         self.residual_from > 0 && k + 1 >= self.residual_from
+    }
+
+    /// The int8 steps the networks train on (quantization-aware training):
+    /// the narrow ones with `int8_range = "narrow"`, none with full ranges.
+    pub fn fake_quant(&self) -> Option<Int8Range> {
+        (self.int8_range == Int8Range::Narrow).then_some(Int8Range::Narrow)
+    }
+
+    /// `net` compiled for this run's validation and regeneration: the f32
+    /// inference (full ranges), or the narrow int8 inference the bundle
+    /// will run (`int8_range = "narrow"`).
+    pub fn inference_engine(&self, net: &NetWeights) -> Result<Cnn, CnnError> {
+        let mut cnn = Cnn::new(net)?;
+        if let Some(range) = self.fake_quant() {
+            cnn.set_int8_range(range);
+            cnn.set_arithmetic(Arithmetic::INT8);
+        }
+        Ok(cnn)
     }
 
     pub(super) fn loss_fn(&self) -> Option<Loss> {

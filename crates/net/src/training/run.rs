@@ -271,7 +271,8 @@ impl<'a> Run<'a> {
         let engine = Engine::parse(&self.config.engine).unwrap_or(Engine::Cnn);
         let loss = self.config.loss_fn().unwrap_or_default();
         let weights = self.start_weights(k, residual)?;
-        let mut learner = Learner::new(engine, &weights, &self.model, loss)?;
+        let quant = self.config.fake_quant();
+        let mut learner = Learner::new(engine, &weights, &self.model, loss, quant)?;
         let resumed = self.resume
             && self.state.step > 0
             && learner.restore(&checkpoint_dir(self.out, self.state.step), &self.model)?;
@@ -332,7 +333,7 @@ impl<'a> Run<'a> {
         learner: &Learner,
         val: &ValidationSet,
     ) -> Result<(), NetError> {
-        let error = validation_error(&learner.compiled(&self.model)?, val);
+        let error = validation_error(&self.compiled(&learner.network(&self.model)?)?, val);
         self.state.best_val = error;
         learner.save(&self.network_path(k), &self.model)?;
         self.log(k, self.config.lr_at(k, self.state.step), f64::NAN, error)
@@ -406,7 +407,7 @@ impl<'a> Run<'a> {
         learner: &Learner,
         val: &ValidationSet,
     ) -> Result<f64, NetError> {
-        let error = validation_error(&learner.compiled(&self.model)?, val);
+        let error = validation_error(&self.compiled(&learner.network(&self.model)?)?, val);
         if error < self.state.best_val {
             self.state.best_val = error;
             learner.save(&self.network_path(k), &self.model)?;
@@ -467,15 +468,28 @@ impl<'a> Run<'a> {
         }
     }
 
+    /// `net` compiled for validation ([`TrainConfig::inference_engine`]).
+    fn compiled(&self, net: &NetWeights) -> Result<Cnn, NetError> {
+        self.config
+            .inference_engine(net)
+            .map_err(|e| NetError::Record {
+                path: PathBuf::from("<model>"),
+                message: e.to_string(),
+            })
+    }
+
     /// Moves the training and validation meshes from the state network `k`
     /// (0-based) meets to the next network's (`regenerate` for the passes
     /// of network `k`'s interval) and saves them in `OUT/states/` for
     /// `--resume`.
     fn advance_meshes(&mut self, net: &NetWeights, k: usize) -> Result<(), NetError> {
-        let engine = Cnn::new(net).map_err(|e| NetError::Record {
-            path: self.network_path(k),
-            message: e.to_string(),
-        })?;
+        let engine = self
+            .config
+            .inference_engine(net)
+            .map_err(|e| NetError::Record {
+                path: self.network_path(k),
+                message: e.to_string(),
+            })?;
         let passes = INTERVALS[k + 1].0 - INTERVALS[k].0;
         self.progress
             .message(&format!("regenerating meshes with network {}", k + 1));
@@ -525,6 +539,7 @@ impl<'a> Run<'a> {
         }
         let mut manifest = new_manifest(&self.config.preset)?;
         manifest.voxel = self.voxel;
+        manifest.int8_range = self.config.int8_range;
         manifest.networks = self.state.networks.clone();
         manifest.training = self.training_info(pool_faces, started);
         manifest.write(&self.out.join(MANIFEST))?;
