@@ -226,6 +226,14 @@ fn the_kernel_path_is_forced_by_normalnet_isa_and_reported() {
             isa.has_avx2(),
             "the int8 stem runs where the blocks do (VNNI or AVX2)"
         );
+        // the shipped (full-range) networks run narrow ranges where plain
+        // AVX2 sums the bytes
+        let range = match (isa.has_avx2(), isa.has_vnni() || isa.uses_avx_vnni()) {
+            (false, _) => serde_json::Value::Null,
+            (true, true) => "full".into(),
+            (true, false) => "narrow".into(),
+        };
+        assert_eq!(v["parameters"]["int8_range"], range, "{isa}");
         let out = read_mesh(&output).unwrap();
         assert!(out.positions.iter().flatten().all(|c| c.is_finite()));
         let m = normalnet()

@@ -47,13 +47,18 @@ fn forward(c: &mut Criterion) {
                     g.bench_function(format!("batch{batch}_int8_all_sparse"), |b| {
                         b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
                     });
-                    // the same with narrow integer ranges (networks trained
-                    // for them): `vpmaddubsw` on plain AVX2
-                    cnn.set_int8_range(Int8Range::Narrow);
-                    g.bench_function(format!("batch{batch}_int8_all_sparse_narrow"), |b| {
-                        b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap())
-                    });
-                    cnn.set_int8_range(Int8Range::Full);
+                    // (the default ranges: full with VNNI, narrow on plain
+                    // AVX2) and each range forced
+                    for range in [Int8Range::Full, Int8Range::Narrow] {
+                        cnn.set_arithmetic(Arithmetic {
+                            int8_range: Some(range),
+                            ..Arithmetic::INT8
+                        });
+                        g.bench_function(
+                            format!("batch{batch}_int8_all_sparse_{}", range.name()),
+                            |b| b.iter(|| cnn.forward_sparse(&samples, &mut out).unwrap()),
+                        );
+                    }
                 }
             }
         }

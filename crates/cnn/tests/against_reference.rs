@@ -63,9 +63,14 @@ fn int8_blocks_stay_within_quantization_error_of_the_reference() {
         .collect();
     let mut exact = vec![0.0f32; batch * 18];
     cnn.forward(&grids, &mut exact).unwrap();
-    if !cnn.set_arithmetic(Arithmetic::INT8_BLOCKS).int8 {
+    // the full ranges (on a path without VNNI the default is narrow)
+    let int8 = Arithmetic {
+        int8_range: Some(Int8Range::Full),
+        ..Arithmetic::INT8_BLOCKS
+    };
+    if !cnn.set_arithmetic(int8).int8 {
         eprintln!("no int8 kernels on this CPU: int8 falls back to f32 (checked), rest skipped");
-        assert_eq!(cnn.arithmetic(), Arithmetic::F32);
+        assert!(!cnn.arithmetic().int8 && cnn.int8_range_in_use().is_none());
         return;
     }
     let mut out = vec![0.0f32; batch * 18];
@@ -259,13 +264,22 @@ fn narrow_int8_gives_the_same_outputs_on_every_path_near_the_reference() {
         let mut cnn = Cnn::new(&w).unwrap();
         cnn.set_isa(isa).unwrap();
         assert_eq!(cnn.int8_range(), Int8Range::Full);
-        if cnn.set_arithmetic(Arithmetic::INT8) != Arithmetic::INT8 {
+        let full_ranges = Arithmetic {
+            int8_range: Some(Int8Range::Full),
+            ..Arithmetic::INT8
+        };
+        if cnn.set_arithmetic(full_ranges) != full_ranges {
             eprintln!("no int8 kernels on {isa}: skipped");
             return;
         }
+        assert_eq!(cnn.int8_range_in_use(), Some(Int8Range::Full));
         let mut full = vec![0.0f32; batch * 18];
         cnn.forward(&grids, &mut full).unwrap();
+        // trained for narrow ranges: narrow on every path unless asked
+        // otherwise
+        cnn.set_arithmetic(Arithmetic::INT8);
         assert_eq!(cnn.set_int8_range(Int8Range::Narrow), Arithmetic::INT8);
+        assert_eq!(cnn.int8_range_in_use(), Some(Int8Range::Narrow));
         let mut out = vec![0.0f32; batch * 18];
         cnn.forward(&grids, &mut out).unwrap();
         assert_ne!(out, full, "{isa}: the narrow ranges did not run");
@@ -276,6 +290,7 @@ fn narrow_int8_gives_the_same_outputs_on_every_path_near_the_reference() {
             "{isa}: narrow int8 off by {worst}"
         );
         assert_eq!(cnn.set_int8_range(Int8Range::Full), Arithmetic::INT8);
+        assert_eq!(cnn.set_arithmetic(full_ranges), full_ranges);
         let mut again = vec![0.0f32; batch * 18];
         cnn.forward(&grids, &mut again).unwrap();
         assert_eq!(again, full, "{isa}: full ranges again");
@@ -292,6 +307,40 @@ fn narrow_int8_gives_the_same_outputs_on_every_path_near_the_reference() {
             pair[0].0,
             pair[1].0
         );
+    }
+}
+
+/// The ranges int8 runs with by default: the network's own (full) where
+/// the path has VNNI, narrow where plain AVX2 sums the bytes; asked ranges
+/// on every path; none with f32 blocks.
+#[test]
+fn the_default_int8_ranges_follow_the_path() {
+    let w = common::random_net(8, 21, [16, 32, 64]);
+    for isa in Isa::all_here().filter(|isa| isa.has_avx2()) {
+        let mut cnn = Cnn::new(&w).unwrap();
+        cnn.set_isa(isa).unwrap();
+        assert_eq!(cnn.int8_range_in_use(), None, "f32 at first");
+        if !cnn.set_arithmetic(Arithmetic::INT8).int8 {
+            eprintln!("no int8 kernels on {isa}: skipped");
+            continue;
+        }
+        let vnni = isa.has_vnni() || isa.uses_avx_vnni();
+        let auto = if vnni {
+            Int8Range::Full
+        } else {
+            Int8Range::Narrow
+        };
+        assert_eq!(cnn.int8_range_in_use(), Some(auto), "{isa}");
+        for range in [Int8Range::Full, Int8Range::Narrow] {
+            let asked = Arithmetic {
+                int8_range: Some(range),
+                ..Arithmetic::INT8
+            };
+            assert_eq!(cnn.set_arithmetic(asked), asked);
+            assert_eq!(cnn.int8_range_in_use(), Some(range), "{isa}");
+        }
+        cnn.set_arithmetic(Arithmetic::F32);
+        assert_eq!(cnn.int8_range_in_use(), None);
     }
 }
 
@@ -325,8 +374,12 @@ fn int8_option_near_the_reference(
     isa: Isa,
     option: fn(&mut Arithmetic) -> &mut bool,
 ) -> Option<(Cnn, Vec<f32>)> {
+    // the full ranges on every path (the narrow ones: their own test)
     let with = |blocks: Arithmetic, on: bool| {
-        let mut a = blocks;
+        let mut a = Arithmetic {
+            int8_range: Some(Int8Range::Full),
+            ..blocks
+        };
         *option(&mut a) = on;
         a
     };
@@ -349,7 +402,9 @@ fn int8_option_near_the_reference(
         return None;
     }
     let mut without = vec![0.0f32; batch * 18];
-    assert!(!runs(cnn.set_arithmetic(Arithmetic::INT8_BLOCKS)));
+    assert!(!runs(
+        cnn.set_arithmetic(with(Arithmetic::INT8_BLOCKS, false))
+    ));
     cnn.forward(&grids, &mut without).unwrap();
     let mut out = vec![0.0f32; batch * 18];
     assert!(runs(cnn.set_arithmetic(int8)));

@@ -127,6 +127,11 @@ impl Method for NormalNet {
         v["int8"] = Value::Bool(self.arithmetic.int8);
         v["int8_stem"] = Value::Bool(self.arithmetic.int8_stem);
         v["int8_shortcut"] = Value::Bool(self.arithmetic.int8_shortcut);
+        // the integer ranges they ran with (null with f32 blocks)
+        v["int8_range"] = match self.bundle.engines[0].int8_range_in_use() {
+            Some(range) => Value::String(range.name().into()),
+            None => Value::Null,
+        };
         // and the kernel path (NORMALNET_ISA, else the best this CPU runs)
         v["isa"] = Value::String(self.bundle.engines[0].instruction_set().into());
         v
