@@ -93,12 +93,22 @@ pub fn describe(bundle: &Bundle) -> String {
         m.voxel.t_s, m.voxel.alpha_c, m.mu_gs
     ));
     line(format!("code        {}", m.code_version));
+    // what the default arithmetic runs on this process's kernel path
+    let isa = normalnet_denoise::isa::active();
+    let runs = match isa.has_vnni() || isa.uses_avx_vnni() {
+        true => m.int8_range,
+        false => Int8Range::Narrow,
+    };
     line(format!(
-        "int8        {} ranges ({})",
+        "int8        {} ranges ({}); on {isa} the default runs {}",
         m.int8_range.name(),
         match m.int8_range {
             Int8Range::Full => "block inputs 0..=255, weights ±127, stem inputs ±127",
             Int8Range::Narrow => "block inputs 0..=127, weights ±63, stem inputs ±63",
+        },
+        match isa.has_avx2() {
+            true => runs.name(),
+            false => "f32 (no int8 kernels)",
         }
     ));
     line(format!(
