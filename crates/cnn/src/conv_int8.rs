@@ -72,11 +72,15 @@ impl Int8Range {
         }
     }
 
-    /// The range called `name` ([`Self::name`]).
-    pub fn from_name(name: &str) -> Option<Int8Range> {
-        [Int8Range::Full, Int8Range::Narrow]
-            .into_iter()
-            .find(|r| r.name() == name)
+    /// The ranges a network trained for `self` runs with by default on
+    /// kernel path `isa`: its own where the path has VNNI (`vpdpbusd`),
+    /// narrow where plain AVX2 sums the bytes (AVX2, AVX-512 without
+    /// VNNI: `vpmaddubsw` is exact only for narrow numbers).
+    pub fn default_on(self, isa: normalnet_isa::Isa) -> Int8Range {
+        match isa.has_vnni() || isa.uses_avx_vnni() {
+            true => self,
+            false => Int8Range::Narrow,
+        }
     }
 }
 
@@ -900,11 +904,16 @@ mod tests {
     ) -> (Vec<u8>, Vec<u8>) {
         let top = range.activation_max() as u32 + 1;
         let x: Vec<u8> = (0..n * n * n * cin).map(|_| (next() % top) as u8).collect();
-        let padded = x
-            .chunks_exact(n * cin)
-            .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
-            .collect();
+        let padded = padded(&x, n, cin);
         (x, padded)
+    }
+
+    /// The bytes `x` of an `[n, n, n, cin]` input with a zero cube before
+    /// and after every W row (the layout `quantize` writes for padding 1).
+    fn padded(x: &[u8], n: usize, cin: usize) -> Vec<u8> {
+        x.chunks_exact(n * cin)
+            .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
+            .collect()
     }
 
     /// Every output `want` and `got` agree bit for bit.
@@ -1008,10 +1017,7 @@ mod tests {
                     *b = top;
                 }
             }
-            let padded: Vec<u8> = x
-                .chunks_exact(n * cin)
-                .flat_map(|row| [&[0; 256][..cin], row, &[0; 256][..cin]].concat())
-                .collect();
+            let padded = padded(&x, n, cin);
             // a mask with runs and gaps, rows with nothing to compute, and
             // a back half in D the kernel need not read
             let mask: Vec<bool> = (0..m * m * m)

@@ -339,6 +339,32 @@ unsafe fn tile_sums_of<M: GroupMac, const T: usize>(
     sums[..T].copy_from_slice(&acc);
 }
 
+/// `acc` + the products of two narrow input groups `x` (bytes ≤ 127, each
+/// group broadcast) and their weight groups `w` (within ±63), summed per
+/// i32 lane: two `vpmaddubsw` (each lane two products, ≤ 2 · 127 · 63 =
+/// 16,002 in magnitude) added in i16 (≤ 32,004: exact), then `vpmaddwd` by
+/// `ones` (every i16 lane 1) adds the lane pairs into the i32 lanes. The
+/// narrow step of the 3³ tiles and of the row stem.
+///
+/// # Safety
+/// The CPU has AVX2.
+#[inline(always)]
+pub(crate) unsafe fn narrow_mac(
+    acc: __m256i,
+    x: [__m256i; 2],
+    w: [__m256i; 2],
+    ones: __m256i,
+) -> __m256i {
+    // SAFETY: the caller's CPU has AVX2.
+    unsafe {
+        let pairs = _mm256_add_epi16(
+            _mm256_maddubs_epi16(x[0], w[0]),
+            _mm256_maddubs_epi16(x[1], w[1]),
+        );
+        _mm256_add_epi32(acc, _mm256_madd_epi16(pairs, ones))
+    }
+}
+
 /// As [`tile_sums`] for narrow bytes (≤ 127) and weights (within ±63), on
 /// the bytes and the VNNI weight layout: per tap, pair of input groups (8
 /// channels) and cube, two `vpmaddubsw` (each lane: two u8 × s8 products,
@@ -390,11 +416,7 @@ unsafe fn tile_sums_narrow<const T: usize>(
                             let x0 = _mm256_set1_epi32(at.cast::<i32>().read_unaligned());
                             let x1 = _mm256_set1_epi32(at.add(4).cast::<i32>().read_unaligned());
                             for v in 0..V {
-                                let pairs = _mm256_add_epi16(
-                                    _mm256_maddubs_epi16(x0, wv0[v]),
-                                    _mm256_maddubs_epi16(x1, wv1[v]),
-                                );
-                                a[v] = _mm256_add_epi32(a[v], _mm256_madd_epi16(pairs, ones));
+                                a[v] = narrow_mac(a[v], [x0, x1], [wv0[v], wv1[v]], ones);
                             }
                         }
                     }

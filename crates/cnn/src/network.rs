@@ -596,15 +596,12 @@ impl Cnn {
         self.quantized.filter(|_| self.int8)
     }
 
-    /// The ranges `arithmetic` runs on this network's path: the asked ones,
-    /// else narrow for a network trained for them or a path without VNNI,
-    /// else the network's own.
+    /// The ranges `arithmetic` runs on this network's path: the asked
+    /// ones, else [`Int8Range::default_on`] the path.
     fn range_for(&self, arithmetic: Arithmetic) -> Int8Range {
-        let vnni = self.isa.has_vnni() || self.isa.uses_avx_vnni();
-        arithmetic.int8_range.unwrap_or(match vnni {
-            true => self.int8_range,
-            false => Int8Range::Narrow,
-        })
+        arithmetic
+            .int8_range
+            .unwrap_or(self.int8_range.default_on(self.isa))
     }
 
     /// The arithmetic in effect: int8 blocks where asked and possible; the

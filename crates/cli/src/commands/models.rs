@@ -95,10 +95,6 @@ pub fn describe(bundle: &Bundle) -> String {
     line(format!("code        {}", m.code_version));
     // what the default arithmetic runs on this process's kernel path
     let isa = normalnet_denoise::isa::active();
-    let runs = match isa.has_vnni() || isa.uses_avx_vnni() {
-        true => m.int8_range,
-        false => Int8Range::Narrow,
-    };
     line(format!(
         "int8        {} ranges ({}); on {isa} the default runs {}",
         m.int8_range.name(),
@@ -107,7 +103,7 @@ pub fn describe(bundle: &Bundle) -> String {
             Int8Range::Narrow => "block inputs 0..=127, weights ±63, stem inputs ±63",
         },
         match isa.has_avx2() {
-            true => runs.name(),
+            true => m.int8_range.default_on(isa).name(),
             false => "f32 (no int8 kernels)",
         }
     ));

@@ -29,6 +29,7 @@ use super::{
     for_each_span, serves,
 };
 use crate::conv_int8::Int8Range;
+use crate::conv_int8_avx2::narrow_mac;
 use std::arch::x86_64::*;
 
 /// Input pairs of a W window (15 bytes and a zero).
@@ -321,9 +322,8 @@ unsafe fn stem_tile_vnni<const T: usize>(
 }
 
 /// As [`stem_tile_vnni`] on plain AVX2 for a narrow stem (bytes ≤ 127,
-/// weights within ±63): per row, pair of window groups and cube, two
-/// `vpmaddubsw` added in i16 (exact, see the module) and one `vpmaddwd` by
-/// ones into the i32 sums, per half of the output channels.
+/// weights within ±63): per row, pair of window groups and cube, one
+/// [`narrow_mac`] per half of the output channels.
 ///
 /// # Safety
 /// The CPU has AVX2 and FMA; `rows` is quantized to `q`'s narrow range,
@@ -368,11 +368,7 @@ unsafe fn stem_tile_narrow<const T: usize>(
                     let x0 = _mm256_set1_epi32(at.cast::<i32>().read_unaligned());
                     let x1 = _mm256_set1_epi32(at.add(4).cast::<i32>().read_unaligned());
                     for h in 0..2 {
-                        let pairs = _mm256_add_epi16(
-                            _mm256_maddubs_epi16(x0, wv0[h]),
-                            _mm256_maddubs_epi16(x1, wv1[h]),
-                        );
-                        a[h] = _mm256_add_epi32(a[h], _mm256_madd_epi16(pairs, ones));
+                        a[h] = narrow_mac(a[h], [x0, x1], [wv0[h], wv1[h]], ones);
                     }
                 }
             }
