@@ -449,31 +449,34 @@ fn max_avx2(x: &[f32]) -> f32 {
 }
 
 /// As [`bytes_scalar`] (the same bytes: the same multiply, add and
-/// truncation, saturated to 0 ..= 255 by the packs), 32 at a time.
+/// truncation, saturated to 0 ..= 255 by the packs), 32 at a time, then 8
+/// at a time (a row of 11 cubes of 16 channels is 5 · 32 + 2 · 8).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn bytes_avx2(x: &[f32], inv: f32, out: &mut [u8]) {
     use std::arch::x86_64::*;
-    let chunks = x.chunks_exact(32);
-    let tail = chunks.remainder();
     let (iv, half, top) = (
         _mm256_set1_ps(inv),
         _mm256_set1_ps(0.5),
         _mm256_set1_ps(255.0),
     );
+    // 8 values to i32 (the scalar's multiply, add, clamp and truncation)
+    let truncated = |v: __m256| {
+        _mm256_cvttps_epi32(_mm256_min_ps(
+            _mm256_add_ps(_mm256_mul_ps(v, iv), half),
+            top,
+        ))
+    };
     // the packs interleave 128-bit lanes: dword order back to the input's
     let order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+    let chunks = x.chunks_exact(32);
+    let rest = chunks.remainder();
     let mut outs = out.chunks_exact_mut(32);
     for (c, o) in chunks.zip(&mut outs) {
         // SAFETY: 32 readable f32, 32 writable bytes.
         unsafe {
-            let q: [__m256i; 4] = std::array::from_fn(|i| {
-                let v = _mm256_loadu_ps(c.as_ptr().add(8 * i));
-                _mm256_cvttps_epi32(_mm256_min_ps(
-                    _mm256_add_ps(_mm256_mul_ps(v, iv), half),
-                    top,
-                ))
-            });
+            let q: [__m256i; 4] =
+                std::array::from_fn(|i| truncated(_mm256_loadu_ps(c.as_ptr().add(8 * i))));
             let words = (
                 _mm256_packus_epi32(q[0], q[1]),
                 _mm256_packus_epi32(q[2], q[3]),
@@ -485,7 +488,20 @@ fn bytes_avx2(x: &[f32], inv: f32, out: &mut [u8]) {
             );
         }
     }
-    bytes_scalar(tail, inv, outs.into_remainder());
+    let eights = rest.chunks_exact(8);
+    let tail = eights.remainder();
+    let mut rest_out = outs.into_remainder().chunks_exact_mut(8);
+    for (c, o) in eights.zip(&mut rest_out) {
+        // SAFETY: 8 readable f32, 8 writable bytes.
+        unsafe {
+            let q = truncated(_mm256_loadu_ps(c.as_ptr()));
+            // bytes 0..4 of each 128-bit lane hold the lane's four values
+            let words = _mm256_packus_epi32(q, q);
+            let bytes = _mm256_permutevar8x32_epi32(_mm256_packus_epi16(words, words), order);
+            _mm_storel_epi64(o.as_mut_ptr().cast(), _mm256_castsi256_si128(bytes));
+        }
+    }
+    bytes_scalar(tail, inv, rest_out.into_remainder());
 }
 
 /// As [`bytes_scalar`] (the same bytes), 16 at a time.
@@ -1147,7 +1163,8 @@ mod tests {
             assert_eq!((q, s), (&scalar[..], max / 127.0), "{isa}");
         }
         // negative and not-a-number inputs saturate to 0 as the scalar cast does
-        let odd: Vec<f32> = (0..64)
+        // 32-value chunks, 8-value chunks and a scalar tail
+        let odd: Vec<f32> = (0..83)
             .map(|i| {
                 if i % 3 == 0 {
                     -1.0

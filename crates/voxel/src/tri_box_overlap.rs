@@ -21,6 +21,9 @@
 
 use normalnet_mesh::vec3::{self, Vec3};
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+
 /// Does the triangle `tri` overlap the axis-aligned box with centre `centre`
 /// and half-sizes `half`? Akenine-Möller's 13-axis separating-axis test.
 /// A degenerate triangle (zero normal) is tested as a segment or point.
@@ -190,9 +193,16 @@ impl CubeTester {
             "cube range {range:?} outside a grid of side {side}"
         );
         #[cfg(target_arch = "x86_64")]
-        if normalnet_isa::active().has_avx512() && side.pow(3) <= i32::MAX as usize {
-            // SAFETY: the AVX-512 path runs only where the CPU has F and VL.
-            return unsafe { self.overlapped_cells_avx512(range, side, cells) };
+        if side.pow(3) <= i32::MAX as usize {
+            let isa = normalnet_isa::active();
+            if isa.has_avx512() {
+                // SAFETY: the AVX-512 path runs only where the CPU has F and VL.
+                return unsafe { self.overlapped_cells_avx512(range, side, cells) };
+            }
+            if isa.has_avx2() {
+                // SAFETY: the AVX2 path runs only where the CPU has it.
+                return unsafe { self.overlapped_cells_avx2(range, side, cells) };
+            }
         }
         self.overlapped_cells_plain(range, side, cells);
     }
@@ -576,7 +586,7 @@ mod tests {
     #[test]
     fn overlapped_cells_equal_single_tests() {
         let mut rng = ChaCha8Rng::seed_from_u64(12);
-        let (mut hits, mut few) = (0, 0);
+        let (mut hits, mut few, mut two) = (0, 0, 0);
         for case in 0..4000 {
             let size = rng.random_range(0.2..12.0);
             let base = [0; 3].map(|_| rng.random_range(1.0..20.0));
@@ -597,12 +607,31 @@ mod tests {
             t.overlapped_cells(range, 21, &mut fast);
             t.overlapped_cells_plain(range, 21, &mut plain);
             assert_eq!(fast, plain, "{tri:?}");
+            // every vector path this CPU runs, whichever is active
+            #[cfg(target_arch = "x86_64")]
+            for isa in normalnet_isa::Isa::all_here() {
+                let mut vector = vec![7];
+                match isa {
+                    // SAFETY: the CPU runs `isa`.
+                    normalnet_isa::Isa::Avx2 => unsafe {
+                        t.overlapped_cells_avx2(range, 21, &mut vector)
+                    },
+                    // SAFETY: as above.
+                    normalnet_isa::Isa::Avx512 => unsafe {
+                        t.overlapped_cells_avx512(range, 21, &mut vector)
+                    },
+                    _ => continue,
+                }
+                assert_eq!(vector, plain, "{isa}: {tri:?}");
+            }
             hits += plain.len() - 1;
             // spans of at most 4 rows j: several columns per vector
             few += usize::from(range[1].1 - range[1].0 < 4);
+            two += usize::from(range[1].1 - range[1].0 < 2);
         }
         assert!(hits > 100_000, "{hits}");
         assert!(few > 400, "{few} triangles of at most 4 rows");
+        assert!(two > 200, "{two} triangles of at most 2 rows");
     }
 
     /// Review: a range beyond the grid made the vector path's room (the
