@@ -83,6 +83,7 @@ impl CubeMask {
     }
 
     /// The cubes flagged in `flags` (len `side³`).
+
     #[cfg(test)]
     pub(crate) fn from_flags(flags: &[bool], side: usize) -> CubeMask {
         assert_eq!(flags.len(), side.pow(3));
@@ -278,6 +279,7 @@ impl FoldedConv {
         for (ow, w) in windows[..m].iter_mut().enumerate() {
             *w = taps(ow, s, p, k, n).fold(0, |bits, kw| bits | 1 << (ow * s + kw - p));
         }
+        let windows_of_m = if m == 64 { u64::MAX } else { (1u64 << m) - 1 };
         for od in 0..m {
             for oh in 0..m {
                 let mut any = 0u64;
@@ -286,10 +288,13 @@ impl FoldedConv {
                         any |= mask_in.row((od * s + kd - p) * n + oh * s + kh - p);
                     }
                 }
-                out.rows[od * m + oh] = windows[..m]
-                    .iter()
-                    .enumerate()
-                    .fold(0, |bits, (ow, &w)| bits | u64::from(any & w != 0) << ow);
+                out.rows[od * m + oh] = match s {
+                    2 => stride_2_row(any, k, p) & windows_of_m,
+                    _ => windows[..m]
+                        .iter()
+                        .enumerate()
+                        .fold(0, |bits, (ow, &w)| bits | u64::from(any & w != 0) << ow),
+                };
             }
         }
     }
@@ -539,6 +544,23 @@ pub(crate) fn bits_of(row: &[bool]) -> u64 {
     tail.iter()
         .enumerate()
         .fold(bits, |bits, (j, &f)| bits | u64::from(f) << (at + j))
+}
+
+/// The output bits of a W row at stride 2: bit `ow` set where the input
+/// row `any` has a bit in `2·ow − p .. 2·ow − p + k` (the window, clipped at
+/// the row's ends, where `any` has no bits). The bits the window reaches
+/// ORed onto bit `2·ow`, then the even bits packed.
+fn stride_2_row(any: u64, k: usize, p: usize) -> u64 {
+    let reach = (0..k).fold(0u64, |t, kw| match kw >= p {
+        true => t | any >> (kw - p),
+        false => t | any << (p - kw),
+    });
+    let mut x = reach & 0x5555_5555_5555_5555;
+    x = (x | x >> 1) & 0x3333_3333_3333_3333;
+    x = (x | x >> 2) & 0x0f0f_0f0f_0f0f_0f0f;
+    x = (x | x >> 4) & 0x00ff_00ff_00ff_00ff;
+    x = (x | x >> 8) & 0x0000_ffff_0000_ffff;
+    (x | x >> 16) & 0x0000_0000_ffff_ffff
 }
 
 /// Valid kernel offsets along one axis for output coordinate `o`:

@@ -633,14 +633,15 @@ pub(crate) fn for_each_tile(
     for od in 0..m {
         for oh in 0..m {
             let first = (od * m + oh) * m;
-            // the first and last cube to compute
-            let (lo, hi) = match region.map(|r| r.mask.row(od * m + oh)) {
+            // the cubes to compute (bit ow), the first and the last
+            let bits = region.map_or(u64::MAX, |r| r.mask.row(od * m + oh));
+            if bits == 0 {
+                background_run(first..first + m, out);
+                continue;
+            }
+            let (lo, hi) = match region {
                 None => (0, m),
-                Some(0) => {
-                    background_run(first..first + m, out);
-                    continue;
-                }
-                Some(bits) => (
+                Some(_) => (
                     bits.trailing_zeros() as usize,
                     64 - bits.leading_zeros() as usize,
                 ),
@@ -651,12 +652,9 @@ pub(crate) fn for_each_tile(
             while ow < hi {
                 let t = tile_len(hi - ow, max_tile);
                 tile([od, oh, ow], t, out);
-                if let Some(r) = region {
-                    for o in first + ow..first + ow + t {
-                        if !r.mask.contains(o) {
-                            background_run(o..o + 1, out);
-                        }
-                    }
+                // the tile's cubes outside the region (none without one)
+                for w in (ow..ow + t).filter(|w| bits >> w & 1 == 0) {
+                    background_run(first + w..first + w + 1, out);
                 }
                 ow += t;
             }
