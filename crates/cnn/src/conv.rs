@@ -83,7 +83,6 @@ impl CubeMask {
     }
 
     /// The cubes flagged in `flags` (len `side³`).
-
     #[cfg(test)]
     pub(crate) fn from_flags(flags: &[bool], side: usize) -> CubeMask {
         assert_eq!(flags.len(), side.pow(3));
