@@ -273,10 +273,13 @@ impl FoldedConv {
         if s == 1 {
             return self.window_mask_stride_1(mask_in, out);
         }
-        // per output cube ow, the bits of its W window
+        // per output cube ow, the bits of its W window (stride 2 packs
+        // them with bit operations instead)
         let mut windows = [0u64; CubeMask::MAX_SIDE];
-        for (ow, w) in windows[..m].iter_mut().enumerate() {
-            *w = taps(ow, s, p, k, n).fold(0, |bits, kw| bits | 1 << (ow * s + kw - p));
+        if s != 2 {
+            for (ow, w) in windows[..m].iter_mut().enumerate() {
+                *w = taps(ow, s, p, k, n).fold(0, |bits, kw| bits | 1 << (ow * s + kw - p));
+            }
         }
         let windows_of_m = if m == 64 { u64::MAX } else { (1u64 << m) - 1 };
         for od in 0..m {

@@ -46,7 +46,6 @@ impl CubeTester {
         cells: &mut Vec<u32>,
     ) {
         let splat = _mm256_set1_pd;
-        let zero = _mm256_setzero_pd();
         let lanes = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
         let four = |first: usize, end: usize| {
             let mask = if end - first >= 4 {
@@ -73,7 +72,12 @@ impl CubeTester {
                 rows: (0..4)
                     .filter(|&lane| rows[lane] < span)
                     .fold(0, |m, lane| m | 1 << lane),
-                y: rows.map(|r| (range[1].0 + r) as f64),
+                y: _mm256_setr_pd(
+                    (range[1].0 + rows[0]) as f64,
+                    (range[1].0 + rows[1]) as f64,
+                    (range[1].0 + rows[2]) as f64,
+                    (range[1].0 + rows[3]) as f64,
+                ),
                 offset: rows.map(|r| ((range[1].0 + r) * side) as i32),
             }
         });
@@ -87,7 +91,7 @@ impl CubeTester {
                         _mm256_add_pd(_mm256_mul_pd(splat(a), z), splat(b * x)),
                         splat(d),
                     );
-                    columns &= _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(v, zero)) as u32;
+                    columns &= non_negative(v);
                 }
                 let mut count = 0;
                 while columns != 0 {
@@ -111,9 +115,7 @@ impl CubeTester {
                             f64::from(k[2]),
                             f64::from(k[3]),
                         );
-                        // SAFETY: 4 readable f64.
-                        let y = unsafe { _mm256_loadu_pd(few.y.as_ptr()) };
-                        let cubes = valid & self.row_tests_avx2(x, y, z);
+                        let cubes = valid & self.row_tests_avx2(x, few.y, z);
                         let base = (i * side * side) as i32;
                         let cell = _mm_setr_epi32(
                             base + few.offset[0] + k[0] as i32,
@@ -155,7 +157,6 @@ impl CubeTester {
     fn row_tests_avx2(&self, x: f64, y: __m256d, z: __m256d) -> u32 {
         let splat = _mm256_set1_pd;
         let zero = _mm256_setzero_pd();
-        let passes = |v: __m256d| _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(v, zero)) as u32;
         // the plane: ((n0·x + n1·y) + n2·z)
         let np = _mm256_add_pd(
             _mm256_add_pd(splat(self.n[0] * x), _mm256_mul_pd(splat(self.n[1]), y)),
@@ -172,17 +173,25 @@ impl CubeTester {
                 _mm256_add_pd(splat(a * x), _mm256_mul_pd(splat(b), y)),
                 splat(d),
             );
-            cubes &= passes(v);
+            cubes &= non_negative(v);
         }
         for [a, b, d] in self.yz {
             let v = _mm256_add_pd(
                 _mm256_add_pd(_mm256_mul_pd(splat(a), y), _mm256_mul_pd(splat(b), z)),
                 splat(d),
             );
-            cubes &= passes(v);
+            cubes &= non_negative(v);
         }
         cubes
     }
+}
+
+/// The lanes of `v` that are ≥ 0 (NaN is not), a bit each: the scalar tests'
+/// `… >= 0.0`.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn non_negative(v: __m256d) -> u32 {
+    _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GE_OQ>(v, _mm256_setzero_pd())) as u32
 }
 
 /// Writes the cells of `cell` whose bit is set in `cubes` side by side at
@@ -214,7 +223,7 @@ struct FewRows {
     /// the lanes whose row is in the span (lane % L < span)
     rows: u32,
     /// per lane: its row j as f64
-    y: [f64; 4],
+    y: __m256d,
     /// per lane: j · side
     offset: [i32; 4],
 }
