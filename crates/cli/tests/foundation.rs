@@ -17,8 +17,11 @@ fn info_noise_metrics_round_trip() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["report"]["faces"], 2 * 40 * 19);
     assert_eq!(v["report"]["boundary_edges"], 0);
+    assert_eq!(v["folded_faces"], 0, "a clean sphere has no folds");
     let o = normalnet(&["info", s(&clean)]);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("mean edge length l_e"));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("mean edge length l_e"));
+    assert!(text.contains("folded faces           0 (0.00 %)"), "{text}");
 
     let (a, b, c) = (
         dir.path().join("a.ply"),
@@ -49,6 +52,12 @@ fn info_noise_metrics_round_trip() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("impulsive"));
+    // noise in random directions folds faces, and info counts them
+    let o = normalnet(&["info", s(&c), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (count, share) = (&v["folded_faces"], v["folded_share"].as_f64().unwrap());
+    assert!(count.as_u64().unwrap() > 0, "{v}");
+    assert_eq!(count, (share * (2 * 40 * 19) as f64).round() as u64);
 
     let o = normalnet(&["metrics", s(&clean), s(&a), "--json"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

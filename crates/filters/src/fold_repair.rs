@@ -198,6 +198,22 @@ impl<'a> FoldCheck<'a> {
     }
 }
 
+/// The share of `mesh`'s faces that are folded by themselves: the
+/// [`FoldCheck`] of its own positions against themselves, counted over its
+/// faces (0 for a mesh without faces). Noise along the normals folds few
+/// faces (the validation suite's Gaussian pairs: at most 5 %); noise with a
+/// tangential part (random directions, a scanner's view direction) folds
+/// many more. NormalNet's switch gate reads it
+/// (`normalnet_net::switch::SwitchWeights::max_folded_share`); `normalnet
+/// info` prints it.
+pub fn folded_share(mesh: &Mesh, topology: &Topology) -> f64 {
+    if mesh.faces.is_empty() {
+        return 0.0;
+    }
+    let check = FoldCheck::new(&mesh.positions, &mesh.faces, topology);
+    check.count(&mesh.positions) as f64 / mesh.faces.len() as f64
+}
+
 /// [`repair_folds`] on `input` without its outlier vertices
 /// (`normalnet_mesh::outliers`, default thresholds), as the methods denoise
 /// it ([`crate::denoise`]): the faces touching an outlier take no part, so
@@ -579,6 +595,20 @@ mod tests {
         let r = repair_folds(&m, &mut out, &t);
         assert_eq!((r.input, r.before, r.after, r.moved), (0, 0, 0, 0));
         assert_eq!(out, m.positions);
+    }
+
+    #[test]
+    fn the_folded_share_counts_the_faces_a_crossed_vertex_folds() {
+        let m = grid();
+        let t = Topology::new(m.num_vertices(), &m.faces);
+        assert_eq!(folded_share(&m, &t), 0.0);
+        // one inner vertex moved across two rings: its own mesh is folded
+        let mut folded = m.clone();
+        folded.positions[3 * 7 + 3][0] += 2.5;
+        let share = folded_share(&folded, &t);
+        let count = FoldCheck::new(&folded.positions, &folded.faces, &t).count(&folded.positions);
+        assert!(count > 0);
+        assert_eq!(share, count as f64 / m.num_faces() as f64);
     }
 
     #[test]

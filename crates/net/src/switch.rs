@@ -30,7 +30,7 @@
 //! without changing the default 10-iteration run.
 
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_pass};
-use normalnet_filters::{Gnf, GnfParams, NormalFilter};
+use normalnet_filters::{FoldCheck, Gnf, GnfParams, NormalFilter};
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Topology};
 use rayon::prelude::*;
@@ -94,6 +94,17 @@ pub struct SwitchWeights {
     /// how it was fitted, in words
     #[serde(default)]
     pub notes: String,
+    /// where a face is folded in the current mesh ([`Candidates::folded`])
+    /// the switch takes the network's output (issue 34): a folded face's
+    /// own normal is no evidence, and the guided pass, GNF and "stay" all
+    /// start from it. The switch's rows come from noise along the normals,
+    /// which folds few faces; noise with a tangential part (random
+    /// directions, a scanner's view direction) folds many, and there the
+    /// switch without this rule lost to the paper's form by 5–22°
+    /// (docs/training.md, "The switch's fold rule"). Off in tables that do
+    /// not name it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub network_on_folds: bool,
     /// the switch of the iterations after `max_iteration` (a `[switch.late]`
     /// table: long runs such as the Table 2 settings' 20–25 iterations);
     /// without it those iterations use this table with the iteration
@@ -188,6 +199,11 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 pub struct Candidates {
     /// in [`CANDIDATES`] order
     pub normals: [Vec<Vec3>; NUM_CANDIDATES],
+    /// per face: folded in the current mesh (the fold test of
+    /// `normalnet_filters::fold_repair` with the current mesh as its own
+    /// reference: the face opposes its 1-ring, or turned more than 75.5°
+    /// from the ring's area-weighted mean normal)
+    pub folded: Vec<bool>,
 }
 
 /// What the switch needs across iterations: GNF's neighbourhood, built once
@@ -221,8 +237,11 @@ impl SwitchState {
         let mut gnf = vec![[0.0; 3]; current.num_faces()];
         self.gnf
             .pass(topology, &geometry, &geometry.normals, &mut gnf);
+        let folded =
+            FoldCheck::new(&current.positions, &current.faces, topology).folded(&current.positions);
         Candidates {
             normals: [net, guided, gnf, geometry.normals],
+            folded,
         }
     }
 }
@@ -289,6 +308,9 @@ pub fn features(topology: &Topology, c: &Candidates, k: usize) -> Vec<[f64; NUM_
     rows
 }
 
+/// Index of the "network" candidate (the paper's form).
+pub const NETWORK: usize = 0;
+
 /// Index of the "stay" candidate (the current normal).
 pub const STAY: usize = 3;
 
@@ -312,7 +334,9 @@ pub fn blend(
     (blended, stay)
 }
 
-/// [`blend`], with per face whether "stay" had the largest weight.
+/// [`blend`], with per face whether "stay" had the largest weight (never
+/// on a folded face that takes the network's output,
+/// [`SwitchWeights::network_on_folds`]).
 pub fn blend_with_stays(
     weights: &SwitchWeights,
     c: &Candidates,
@@ -323,6 +347,9 @@ pub fn blend_with_stays(
         .enumerate()
         .with_min_len(256)
         .map(|(f, x)| {
+            if weights.network_on_folds && c.folded[f] {
+                return (c.normals[NETWORK][f], false);
+            }
             let p = weights.probabilities(x);
             let mut sum = [0.0; 3];
             for (candidate, w) in c.normals.iter().zip(p) {
@@ -354,6 +381,7 @@ pub(crate) mod tests {
             b2,
             max_iteration: DEFAULT_MAX_ITERATION,
             notes: String::new(),
+            network_on_folds: false,
             late: None,
         }
     }
@@ -503,5 +531,47 @@ pub(crate) mod tests {
                 }
             }
         }
+        // the clean mesh has no folded face
+        assert!(c.folded.iter().all(|f| !f));
+    }
+
+    #[test]
+    fn with_the_fold_rule_folded_faces_take_the_network_output() {
+        let mesh = normalnet_voxel::shapes::generate_seeded(3, 300).unwrap();
+        let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+        // one vertex pushed through the surface: its faces fold
+        let mut folded = mesh.clone();
+        let v = mesh.faces[0][0] as usize;
+        let n = normalnet_mesh::geometry::face_normals(&mesh)[0];
+        let l = normalnet_mesh::geometry::mean_edge_length(&mesh, &topology);
+        folded.positions[v] = vec3::sub(folded.positions[v], vec3::scale(n, 3.0 * l));
+        let mut state = SwitchState::new(&folded, &topology, 0.35);
+        // a "network" that outputs +x everywhere: unlike every other candidate
+        let net = vec![[1.0, 0.0, 0.0]; mesh.num_faces()];
+        let c = state.candidates(&folded, &topology, net);
+        let check = FoldCheck::new(&folded.positions, &folded.faces, &topology);
+        assert_eq!(c.folded, check.folded(&folded.positions));
+        let count = c.folded.iter().filter(|&&f| f).count();
+        assert!(count > 0, "pushing a vertex through folds its fan");
+        let x = features(&topology, &c, 1);
+        let mut stay = constant(STAY);
+        let close = |a: Vec3, b: Vec3| vec3::angle(a, b) < 1e-9;
+        let (b, stays) = blend_with_stays(&stay, &c, &x);
+        assert!(stays.iter().all(|&s| s));
+        assert!((0..b.len()).all(|f| close(b[f], c.normals[STAY][f])));
+        stay.network_on_folds = true;
+        let (b, stays) = blend_with_stays(&stay, &c, &x);
+        for f in 0..b.len() {
+            let want = if c.folded[f] { NETWORK } else { STAY };
+            assert!(close(b[f], c.normals[want][f]), "face {f}");
+            assert_eq!(stays[f], !c.folded[f], "face {f}");
+        }
+        // the rule is part of the table as a bundle stores it
+        let text = toml::to_string(&stay).unwrap();
+        assert!(text.contains("network_on_folds = true"));
+        let back: SwitchWeights = toml::from_str(&text).unwrap();
+        assert!(back.network_on_folds);
+        let off = toml::to_string(&constant(STAY)).unwrap();
+        assert!(!off.contains("network_on_folds"));
     }
 }

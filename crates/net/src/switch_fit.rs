@@ -179,6 +179,7 @@ pub fn fit(
         b2: b2.to_vec(),
         max_iteration: params.max_iteration,
         notes: String::new(),
+        network_on_folds: false,
         late: None,
     };
     weights.validate()?;

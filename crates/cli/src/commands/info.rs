@@ -2,10 +2,14 @@
 //! (SPEC §1; the validation policy of `normalnet_mesh::validate`): boundary
 //! and non-manifold edges, non-manifold (bow-tie) vertices, edges traversed
 //! twice in the same direction (inconsistent orientation), degenerate and
-//! duplicate faces, unreferenced vertices.
+//! duplicate faces, unreferenced vertices; and the share of folded faces
+//! (`normalnet_filters::folded_share`: a sign of noise with a tangential
+//! part, which NormalNet's switch gate reads).
 
 use crate::input::read_mesh_as;
 use anyhow::Context;
+use normalnet_filters::folded_share;
+use normalnet_mesh::Topology;
 use normalnet_mesh::io::Format;
 use normalnet_mesh::validate::validate;
 use std::io::Write;
@@ -49,12 +53,17 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
         .with_context(|| format!("reading {}", args.mesh.display()))?;
     let load = t.elapsed().as_secs_f64();
     let r = validate(&mesh);
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let folded = folded_share(&mesh, &topology);
+    let folded_faces = (folded * mesh.num_faces() as f64).round() as usize;
     let mut out = std::io::stdout().lock();
     if args.json {
         let v = serde_json::json!({
             "path": args.mesh,
             "report": r,
             "warnings": r.warnings(),
+            "folded_faces": folded_faces,
+            "folded_share": folded,
             "load_seconds": load,
             "seconds": t.elapsed().as_secs_f64(),
         });
@@ -89,6 +98,11 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     writeln!(out, "  duplicate faces        {}", r.duplicate_faces)?;
     writeln!(out, "  unreferenced vertices  {}", r.unreferenced_vertices)?;
     writeln!(out, "  outlier vertices       {}", r.outlier_vertices)?;
+    writeln!(
+        out,
+        "  folded faces           {folded_faces} ({:.2} %)",
+        100.0 * folded
+    )?;
     writeln!(out, "  read in                {:.3} s", load)?;
     for w in r.warnings() {
         writeln!(out, "warning: {w}")?;

@@ -243,6 +243,11 @@ pub struct FitStage {
     /// table's clamp) instead of the main one
     #[serde(default)]
     pub late: bool,
+    /// the table takes the network's output on folded faces
+    /// (`normalnet_net::switch::SwitchWeights::network_on_folds`); a table
+    /// taken from a bundle keeps its own rule without it
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub network_on_folds: bool,
     /// written into the table's `notes`
     #[serde(default)]
     pub notes: String,

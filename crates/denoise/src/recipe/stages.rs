@@ -236,6 +236,7 @@ pub(super) fn switch_fit(
                 .ok_or_else(|| fail(&"the bundle has no late table"))?,
         };
         table.late = None;
+        table.network_on_folds |= stage.network_on_folds;
         let text = toml::to_string(&SwitchFile { switch: table }).map_err(|e| fail(&e))?;
         return write_file(&dir.join(SWITCH_FILE), text.as_bytes());
     }
@@ -263,6 +264,7 @@ pub(super) fn switch_fit(
         ..FitParams::default()
     };
     let (mut weights, report) = fit(&rows, &[0, 1, 2, 3], &params).map_err(|e| fail(&e))?;
+    weights.network_on_folds = stage.network_on_folds;
     weights.notes = format!(
         "{}{}fitted by recipe {} stage {:?} ({} hidden, {} epochs, seed {}, iteration clamp {}, iterations {}..{}) on {} rows of {}; expected angle {:.3} deg in the last epoch (per candidate {:.3?}, per-row best {:.3})",
         stage.notes,

@@ -16,13 +16,15 @@ pub struct Chooser<'a> {
     switch_state: Option<SwitchState>,
 }
 
-/// The filtered normals of one iteration, and with the switch the share of
-/// faces that chose "stay" (0 in the other forms).
+/// The filtered normals of one iteration, and with the switch the shares of
+/// faces that chose "stay" and that were folded (0 in the other forms).
 pub struct Choice {
     /// per face, unit length
     pub normals: Vec<Vec3>,
     /// see [`crate::pipeline::IterationStats::stay_share`]
     pub stay_share: f64,
+    /// see [`crate::pipeline::IterationStats::folded_share`]
+    pub folded_share: f64,
 }
 
 impl<'a> Chooser<'a> {
@@ -48,6 +50,7 @@ impl<'a> Chooser<'a> {
         let paper = |normals| Choice {
             normals,
             stay_share: 0.0,
+            folded_share: 0.0,
         };
         match self.form {
             Form::Paper => paper(normals),
@@ -64,9 +67,11 @@ impl<'a> Chooser<'a> {
                 let n = blended.len();
                 let stay = (0..n).filter(|&f| stays[f] && counted(f)).count();
                 let total = (0..n).filter(|&f| counted(f)).count();
+                let folded = candidates.folded.iter().filter(|&&b| b).count();
                 Choice {
                     normals: blended,
                     stay_share: stay as f64 / total.max(1) as f64,
+                    folded_share: folded as f64 / n.max(1) as f64,
                 }
             }
         }

@@ -88,6 +88,7 @@ pub fn denoise(
             mean_change_deg,
             seconds: iteration_start.elapsed().as_secs_f64(),
             stay_share: choice.stay_share,
+            folded_share: choice.folded_share,
         });
         if stop.stops(k, mean_change_deg, choice.stay_share) {
             break;

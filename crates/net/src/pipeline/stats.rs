@@ -36,6 +36,11 @@ pub struct IterationStats {
     /// with the learned switch: the share of faces whose largest weight was
     /// "stay" (the run stops at [`crate::switch::STAY_SHARE_TO_STOP`]); 0 without it
     pub stay_share: f64,
+    /// with the learned switch: the share of faces folded in the mesh the
+    /// iteration started from (they take the network's output where the
+    /// switch table says so, [`crate::switch::SwitchWeights::network_on_folds`]);
+    /// 0 without it
+    pub folded_share: f64,
 }
 
 impl StageTimes {

@@ -323,6 +323,53 @@ fn the_learned_switch_blends_candidates_and_is_optional() {
 }
 
 #[test]
+fn with_the_fold_rule_the_switch_moves_only_around_folded_faces() {
+    let clean = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let topology = Topology::new(clean.num_vertices(), &clean.faces);
+    // one vertex pushed through the surface: its fan folds
+    let l = normalnet_mesh::geometry::mean_edge_length(&clean, &topology);
+    let v = clean.faces[0][0] as usize;
+    let n = face_normals(&clean)[0];
+    let mut mesh = clean.clone();
+    mesh.positions[v] = vec3::sub(mesh.positions[v], vec3::scale(n, 3.0 * l));
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let mut bundle = tiny_bundle();
+    let mut stay = crate::switch::tests::constant(3);
+    let params = DenoiseParams {
+        iterations: 1,
+        vertex_iterations: 1,
+        ..DenoiseParams::default()
+    };
+    let run = |bundle: &Bundle| denoise(&mesh, bundle, &params, &NoProgress).unwrap();
+    // "stay" everywhere: nothing moves, though faces are folded
+    bundle.manifest.switch = Some(stay.clone());
+    let moved = |out: &Mesh| -> Vec<usize> {
+        (0..mesh.num_vertices())
+            .filter(|&i| vec3::norm(vec3::sub(out.positions[i], mesh.positions[i])) > 1e-9)
+            .collect()
+    };
+    let (out, times) = run(&bundle);
+    assert!(moved(&out).is_empty());
+    let folded = times.iterations[0].folded_share;
+    assert!(folded > 0.0 && folded < 0.1, "{folded}");
+    // with the rule the folded faces follow the network: vertices move, but
+    // (one vertex update) only those of folded faces
+    stay.network_on_folds = true;
+    bundle.manifest.switch = Some(stay);
+    let (out, times) = run(&bundle);
+    assert_eq!(times.iterations[0].folded_share, folded);
+    assert!(times.iterations[0].stay_share < 1.0);
+    let check = normalnet_filters::FoldCheck::new(&mesh.positions, &mesh.faces, &topology);
+    let folded_faces = check.folded(&mesh.positions);
+    let of_folded = |i: usize| {
+        (0..mesh.num_faces()).any(|f| folded_faces[f] && mesh.faces[f].contains(&(i as u32)))
+    };
+    let moved = moved(&out);
+    assert!(!moved.is_empty());
+    assert!(moved.iter().all(|&i| of_folded(i)), "{moved:?}");
+}
+
+#[test]
 fn the_flat_rule_chooses_between_the_guided_and_the_paper_form() {
     let bundle = tiny_bundle();
     let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
