@@ -424,6 +424,35 @@ noise = [{ level = 0.6, seed = 2 }, { level = 1.0, impulsive_fraction = 0.1, see
         Suite::parse(text, Path::new("s.toml"), PathBuf::from("."))
     }
 
+    /// The fold study (configs/switch-fold-study.toml) chooses a rule of
+    /// the shipped switch, so it may not use what checks the choice: no
+    /// source of the validation suite, no procedural shape it reserves
+    /// (900–999), no test data.
+    #[test]
+    fn the_fold_study_keeps_out_of_the_validation_suite() {
+        let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs");
+        let study = Suite::load(&configs.join("switch-fold-study.toml")).unwrap();
+        let validation = Suite::load(&configs.join("validation.toml")).unwrap();
+        assert!(study.pairs.len() >= 10);
+        for pair in &study.pairs {
+            let source = pair.source.as_str();
+            assert!(
+                validation.pairs.iter().all(|v| v.source != source),
+                "{}: {source} is a validation source",
+                pair.name
+            );
+            let seed = source
+                .strip_prefix("shape:")
+                .and_then(|s| s.parse::<u64>().ok());
+            assert!(
+                seed.is_none_or(|s| !(900..1000).contains(&s)),
+                "{}: {source} is reserved for validation",
+                pair.name
+            );
+            assert_eq!(test_data_in(source), None, "{}", pair.name);
+        }
+    }
+
     #[test]
     fn a_suite_is_generated_once_and_regenerated_when_its_spec_changes() {
         let suite = parse(TINY).unwrap();
