@@ -54,6 +54,7 @@ fn info_noise_metrics_round_trip() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("impulsive"));
     // noise in random directions folds faces, and info counts them
     let o = normalnet(&["info", s(&c), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let (count, share) = (&v["folded_faces"], v["folded_share"].as_f64().unwrap());
     assert!(count.as_u64().unwrap() > 0, "{v}");

@@ -102,7 +102,11 @@ pub struct SwitchWeights {
     /// directions, a scanner's view direction) folds many, and there the
     /// switch without this rule lost to the paper's form by 5–22°
     /// (docs/training.md, "The switch's fold rule"). Off in tables that do
-    /// not name it.
+    /// not name it. Read from the main table only: its rule covers the
+    /// late table's iterations too, and a late table may not set it
+    /// ([`SwitchWeights::validate`]). A folded face never counts as "stay",
+    /// so a run on a mesh that keeps more than 5 % of its faces folded does
+    /// not end by the stay rule ([`STAY_SHARE_TO_STOP`]) and runs its N_f.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub network_on_folds: bool,
     /// the switch of the iterations after `max_iteration` (a `[switch.late]`
@@ -148,6 +152,10 @@ impl SwitchWeights {
         }
         match &self.late {
             Some(late) if late.late.is_some() => Err("switch.late: late tables do not nest".into()),
+            Some(late) if late.network_on_folds => Err(
+                "switch.late: network_on_folds belongs to [switch], whose rule covers every iteration"
+                    .into(),
+            ),
             Some(late) => late
                 .validate()
                 .map_err(|e| e.replacen("switch", "switch.late", 1)),
@@ -202,7 +210,8 @@ pub struct Candidates {
     /// per face: folded in the current mesh (the fold test of
     /// `normalnet_filters::fold_repair` with the current mesh as its own
     /// reference: the face opposes its 1-ring, or turned more than 75.5°
-    /// from the ring's area-weighted mean normal)
+    /// from the ring's area-weighted mean normal; a degenerate face, whose
+    /// normal is zero, counts as folded)
     pub folded: Vec<bool>,
 }
 
@@ -475,6 +484,15 @@ pub(crate) mod tests {
         let mut w = constant(1);
         w.max_iteration = 0;
         assert!(w.validate().unwrap_err().contains("max_iteration"));
+        // the fold rule is the main table's
+        let mut w = constant(1);
+        let mut late = constant(2);
+        late.network_on_folds = true;
+        w.late = Some(Box::new(late));
+        assert!(w.validate().unwrap_err().contains("network_on_folds"));
+        w.late.as_mut().unwrap().network_on_folds = false;
+        w.network_on_folds = true;
+        assert!(w.validate().is_ok());
     }
 
     #[test]

@@ -176,11 +176,15 @@ pub fn trace(
                 })
                 .collect(),
             TracePath::Learned(w) => {
-                for x in &features {
-                    let p = w.probabilities(x);
-                    let best = (0..NUM_CANDIDATES)
-                        .max_by(|&a, &b| p[a].total_cmp(&p[b]))
-                        .unwrap_or(0);
+                for (f, x) in features.iter().enumerate() {
+                    let best = if w.network_on_folds && c.folded[f] {
+                        switch::NETWORK
+                    } else {
+                        let p = w.probabilities(x);
+                        (0..NUM_CANDIDATES)
+                            .max_by(|&a, &b| p[a].total_cmp(&p[b]))
+                            .unwrap_or(0)
+                    };
                     out.chosen[best] += 1;
                 }
                 switch::blend(w, &c, &features).0

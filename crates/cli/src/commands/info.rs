@@ -2,13 +2,13 @@
 //! (SPEC §1; the validation policy of `normalnet_mesh::validate`): boundary
 //! and non-manifold edges, non-manifold (bow-tie) vertices, edges traversed
 //! twice in the same direction (inconsistent orientation), degenerate and
-//! duplicate faces, unreferenced vertices; and the share of folded faces
-//! (`normalnet_filters::folded_share`: a sign of noise with a tangential
-//! part, which NormalNet's switch gate reads).
+//! duplicate faces, unreferenced vertices; and the folded faces
+//! (`normalnet_filters::FoldCheck` of the mesh against itself: a sign of
+//! noise with a tangential part; degenerate faces count as folded too).
 
 use crate::input::read_mesh_as;
 use anyhow::Context;
-use normalnet_filters::folded_share;
+use normalnet_filters::FoldCheck;
 use normalnet_mesh::Topology;
 use normalnet_mesh::io::Format;
 use normalnet_mesh::validate::validate;
@@ -54,8 +54,9 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     let load = t.elapsed().as_secs_f64();
     let r = validate(&mesh);
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-    let folded = folded_share(&mesh, &topology);
-    let folded_faces = (folded * mesh.num_faces() as f64).round() as usize;
+    let folded_faces =
+        FoldCheck::new(&mesh.positions, &mesh.faces, &topology).count(&mesh.positions);
+    let folded = folded_faces as f64 / mesh.num_faces().max(1) as f64;
     let mut out = std::io::stdout().lock();
     if args.json {
         let v = serde_json::json!({

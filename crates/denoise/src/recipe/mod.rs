@@ -244,10 +244,12 @@ pub struct FitStage {
     #[serde(default)]
     pub late: bool,
     /// the table takes the network's output on folded faces
-    /// (`normalnet_net::switch::SwitchWeights::network_on_folds`); a table
-    /// taken from a bundle keeps its own rule without it
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub network_on_folds: bool,
+    /// (`normalnet_net::switch::SwitchWeights::network_on_folds`): `true`
+    /// turns the rule on, `false` off; unset, a fitted table has it off and
+    /// a table taken from a bundle keeps the bundle's. Main tables only
+    /// (the main table's rule covers the late table's iterations).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub network_on_folds: Option<bool>,
     /// written into the table's `notes`
     #[serde(default)]
     pub notes: String,
@@ -629,8 +631,20 @@ impl Recipe {
         Ok(())
     }
 
+    /// The fold rule belongs to main tables.
+    fn check_fold_rule(&self, s: &FitStage) -> Result<(), DenoiseError> {
+        if s.late && s.network_on_folds.is_some() {
+            return Err(self.stage_error(
+                &s.name,
+                "network_on_folds is set on the main table, whose rule covers the late table's iterations".into(),
+            ));
+        }
+        Ok(())
+    }
+
     fn check_taken_table(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
         let bad = |message: String| self.stage_error(&s.name, message);
+        self.check_fold_rule(s)?;
         if !s.rows.is_empty() {
             return Err(bad(
                 "a stage takes its table from `bundle` or fits it on `rows`, not both".into(),
@@ -659,6 +673,7 @@ impl Recipe {
 
     fn check_fit(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
         let bad = |message: String| self.stage_error(&s.name, message);
+        self.check_fold_rule(s)?;
         if s.rows.is_empty() {
             return Err(bad("no rows stages".into()));
         }

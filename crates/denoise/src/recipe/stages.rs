@@ -236,7 +236,9 @@ pub(super) fn switch_fit(
                 .ok_or_else(|| fail(&"the bundle has no late table"))?,
         };
         table.late = None;
-        table.network_on_folds |= stage.network_on_folds;
+        if let Some(on) = stage.network_on_folds {
+            table.network_on_folds = on;
+        }
         let text = toml::to_string(&SwitchFile { switch: table }).map_err(|e| fail(&e))?;
         return write_file(&dir.join(SWITCH_FILE), text.as_bytes());
     }
@@ -264,7 +266,7 @@ pub(super) fn switch_fit(
         ..FitParams::default()
     };
     let (mut weights, report) = fit(&rows, &[0, 1, 2, 3], &params).map_err(|e| fail(&e))?;
-    weights.network_on_folds = stage.network_on_folds;
+    weights.network_on_folds = stage.network_on_folds.unwrap_or(false);
     weights.notes = format!(
         "{}{}fitted by recipe {} stage {:?} ({} hidden, {} epochs, seed {}, iteration clamp {}, iterations {}..{}) on {} rows of {}; expected angle {:.3} deg in the last epoch (per candidate {:.3?}, per-row best {:.3})",
         stage.notes,

@@ -45,6 +45,13 @@ epochs = 2
     let Stage::SwitchRows(rows) = &r.stages[1] else {
         panic!("rows")
     };
+    let Stage::SwitchFit(fit) = &r.stages[2] else {
+        panic!("fit")
+    };
+    assert_eq!(
+        fit.network_on_folds, None,
+        "unset: the fitted table has no fold rule"
+    );
     assert_eq!(
         (rows.mu_g, rows.vertex_iterations, rows.int8),
         (0.35, 20, true)
@@ -92,6 +99,10 @@ fn bad_recipes_are_refused_naming_the_stage() {
     refused(
         "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = [{ mesh = \"shape:1\", gaussian = [0.3] }]\n[[stage]]\nkind = \"switch_fit\"\nname = \"late\"\nrows = [\"rows\"]\nlate = true\nmin_iteration = 11\n",
         "a late table needs an earlier main switch_fit stage",
+    );
+    refused(
+        "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = [{ mesh = \"shape:1\", gaussian = [0.3] }]\n[[stage]]\nkind = \"switch_fit\"\nname = \"main\"\nrows = [\"rows\"]\n[[stage]]\nkind = \"switch_fit\"\nname = \"late\"\nrows = [\"rows\"]\nlate = true\nmin_iteration = 11\nnetwork_on_folds = true\n",
+        "stage \"late\": network_on_folds is set on the main table",
     );
     refused(
         "[[stage]]\nkind = \"evaluate\"\nname = \"e\"\nsuite = \"missing.toml\"\n",
