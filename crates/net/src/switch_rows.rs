@@ -59,6 +59,11 @@ pub struct TraceSettings {
     pub auto_stop_deg: f64,
     /// network inference batch
     pub inference_batch: usize,
+    /// rows of faces folded in the mesh the iteration starts from
+    /// ([`crate::switch::Candidates::folded`]) are not kept: a table fitted
+    /// with [`SwitchWeights::network_on_folds`] never decides those faces,
+    /// so their rows would only pull it toward the network elsewhere
+    pub skip_folded: bool,
 }
 
 impl Default for TraceSettings {
@@ -71,6 +76,7 @@ impl Default for TraceSettings {
             min_iteration: 1,
             auto_stop_deg: 0.0,
             inference_batch: 256,
+            skip_folded: false,
         }
     }
 }
@@ -84,6 +90,8 @@ pub struct Trace {
     pub e_a_deg: Vec<f64>,
     /// how often each candidate had the largest weight (faces × iterations)
     pub chosen: [usize; NUM_CANDIDATES],
+    /// rows left out as folded ([`TraceSettings::skip_folded`])
+    pub skipped_folded: usize,
 }
 
 /// Runs the pipeline of `bundle` on `noisy` (vertices following `path`)
@@ -157,7 +165,11 @@ pub fn trace(
             .collect();
         if k >= settings.min_iteration {
             out.rows.reserve(n * ROW_LEN);
-            for (r, e) in features.iter().zip(&errors) {
+            for (f, (r, e)) in features.iter().zip(&errors).enumerate() {
+                if settings.skip_folded && c.folded[f] {
+                    out.skipped_folded += 1;
+                    continue;
+                }
                 out.rows.extend(r.iter().chain(e.iter()).map(|x| *x as f32));
             }
         }

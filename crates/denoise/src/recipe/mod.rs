@@ -203,6 +203,11 @@ pub struct RowsStage {
     /// (where the CPU has AVX2)
     #[serde(default = "yes")]
     pub int8: bool,
+    /// rows of faces folded in the mesh an iteration starts from are left
+    /// out: rows for a table fitted with `network_on_folds = true`, which
+    /// never decides those faces (`normalnet_net::switch_rows::TraceSettings::skip_folded`)
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub skip_folded: bool,
 }
 
 /// Stage `switch_fit`.

@@ -113,6 +113,8 @@ struct PairReport {
     rows: usize,
     e_a_deg: Vec<f64>,
     chosen: Vec<usize>,
+    /// rows left out as folded (`skip_folded`)
+    skipped_folded: usize,
 }
 
 /// `switch_rows`: one rows file per noisy pair (`pair-N.bin`), written
@@ -145,6 +147,7 @@ pub(super) fn switch_rows(
         vertex_iterations: stage.vertex_iterations,
         flat_skip_deg: stage.flat_skip_deg,
         min_iteration: stage.min_iteration,
+        skip_folded: stage.skip_folded,
         ..TraceSettings::default()
     };
     let config = rows_config(stage);
@@ -173,6 +176,7 @@ pub(super) fn switch_rows(
                 rows: t.rows.len() / ROW_LEN,
                 e_a_deg: t.e_a_deg,
                 chosen: t.chosen.to_vec(),
+                skipped_folded: t.skipped_folded,
             });
         }
         progress.advance(1);

@@ -545,3 +545,46 @@ fn frozen_faces_keep_their_output_and_auto_stop_ends_the_run() {
         ));
     }
 }
+
+#[test]
+fn traced_rows_can_leave_out_the_folded_faces() {
+    use crate::switch_fit::ROW_LEN;
+    use crate::switch_rows::{TracePath, TraceSettings, trace};
+    let clean = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let topology = Topology::new(clean.num_vertices(), &clean.faces);
+    let l = normalnet_mesh::geometry::mean_edge_length(&clean, &topology);
+    let v = clean.faces[0][0] as usize;
+    let n = face_normals(&clean)[0];
+    let mut noisy = clean.clone();
+    noisy.positions[v] = vec3::sub(noisy.positions[v], vec3::scale(n, 3.0 * l));
+    let folded = normalnet_filters::FoldCheck::new(&noisy.positions, &noisy.faces, &topology)
+        .folded(&noisy.positions)
+        .iter()
+        .filter(|&&f| f)
+        .count();
+    assert!(folded > 0);
+    let bundle = tiny_bundle();
+    let settings = TraceSettings {
+        iterations: 1,
+        vertex_iterations: 1,
+        ..TraceSettings::default()
+    };
+    let path = TracePath::Candidate(0);
+    let all = trace(&bundle, &noisy, &clean, &path, &settings).unwrap();
+    assert_eq!(all.rows.len(), noisy.num_faces() * ROW_LEN);
+    assert_eq!(all.skipped_folded, 0);
+    let skip = TraceSettings {
+        skip_folded: true,
+        ..settings
+    };
+    let kept = trace(&bundle, &noisy, &clean, &path, &skip).unwrap();
+    assert_eq!(kept.skipped_folded, folded);
+    assert_eq!(kept.rows.len(), (noisy.num_faces() - folded) * ROW_LEN);
+    // the vertices follow the same path: the rows kept are the same rows
+    assert_eq!(kept.e_a_deg, all.e_a_deg);
+    assert!(
+        kept.rows
+            .chunks_exact(ROW_LEN)
+            .all(|r| all.rows.chunks_exact(ROW_LEN).any(|a| a == r))
+    );
+}
