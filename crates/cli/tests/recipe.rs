@@ -3,6 +3,7 @@
 //! network, then inside the switch rows) and run again ends with the
 //! bundle of an uninterrupted run: the same network bytes and the same
 //! manifest but for its wall-clock fields; the bundle loads and denoises;
+//! the recipe edited reruns the edited stage and the later ones only;
 //! another recipe is refused in that folder.
 #![cfg(unix)]
 
@@ -169,7 +170,8 @@ fn issue_35_a_killed_recipe_run_resumes_to_the_bundle_of_an_uninterrupted_one() 
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(output.is_file());
 
-    // another recipe (here: the same one edited) is refused in that folder
+    // the same recipe edited (the switch tables' epochs): the stages before
+    // the edit are kept, the edited one and every later one run again
     let edited = dir.path().join("recipes");
     std::fs::create_dir(&edited).unwrap();
     for f in ["smoke.toml", "smoke-more.toml", "smoke-suite.toml"] {
@@ -184,9 +186,49 @@ fn issue_35_a_killed_recipe_run_resumes_to_the_bundle_of_an_uninterrupted_one() 
     let text = std::fs::read_to_string(&file).unwrap();
     std::fs::write(&file, text.replace("epochs = 3", "epochs = 4")).unwrap();
     let o = normalnet(&["train", "-q", "--recipe", s(&file), "--out", s(&killed)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for kept in ["networks networks", "networks more", "switch_rows rows"] {
+        assert!(text.contains(&format!("{kept}: done before")), "{text}");
+    }
+    for again in [
+        "switch_fit switch",
+        "switch_rows late-rows",
+        "evaluate validation",
+    ] {
+        assert!(text.contains(&format!("{again}: ran")), "{text}");
+    }
+    for k in 1..=6 {
+        let file = format!("net{k}.safetensors");
+        assert!(
+            std::fs::read(reference.join(&file)).unwrap()
+                == std::fs::read(killed.join(&file)).unwrap(),
+            "{file} changed though its stages did not"
+        );
+    }
+    assert_ne!(
+        manifest_without_clock(&reference),
+        manifest_without_clock(&killed)
+    );
+    // run again unchanged: nothing runs
+    let o = normalnet(&["train", "-q", "--recipe", s(&file), "--out", s(&killed)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!String::from_utf8_lossy(&o.stdout).contains(": ran"));
+
+    // another recipe (another name) is refused in that folder
+    std::fs::write(
+        &file,
+        text_renamed(&std::fs::read_to_string(&file).unwrap()),
+    )
+    .unwrap();
+    let o = normalnet(&["train", "-q", "--recipe", s(&file), "--out", s(&killed)]);
     assert!(!o.status.success());
     let err = stderr(&o);
-    assert!(err.contains("holds a run of recipe"), "{err}");
+    assert!(err.contains("holds a run of recipe \"smoke\""), "{err}");
+}
+
+fn text_renamed(text: &str) -> String {
+    text.replacen("name = \"smoke\"", "name = \"other\"", 1)
 }
 
 #[test]

@@ -73,7 +73,9 @@
 //! of the last one with `late = true`) and the figures of the last
 //! `evaluate` stage; its manifest's `[recipe]` records the recipe, its hash
 //! (the recipe and every file it names) and the commit. Each stage works in
-//! `DIR/stages/NN-name/` and is done when its `DONE` file exists.
+//! `DIR/stages/NN-name/` and is done when its `DONE` file holds the
+//! stage's hash ([`Recipe::stage_hashes`]): an edited recipe reruns the
+//! stages its edit changes and every later one, and keeps the earlier ones.
 
 mod evaluate;
 mod run;
@@ -273,6 +275,14 @@ pub struct EvaluateStage {
     pub params: serde_json::Map<String, serde_json::Value>,
 }
 
+/// Appends the length and the bytes of `file` to `bytes`.
+fn append_file(bytes: &mut Vec<u8>, file: &Path) -> Result<(), DenoiseError> {
+    let content = std::fs::read(file).map_err(|e| recipe_error(file, format!("reading: {e}")))?;
+    bytes.extend_from_slice(&(content.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(&content);
+    Ok(())
+}
+
 fn default_rows_seed() -> u64 {
     5000
 }
@@ -404,38 +414,67 @@ impl Recipe {
     }
 
     /// FNV-1a 64 (hex) of the recipe's text and of every file it names
-    /// (training configs, suites): a run in a folder continues only under
-    /// the same hash.
+    /// (training configs, suites, bundles): the recipe's record in the
+    /// bundle it makes.
     ///
     /// # Errors
     /// A named file that cannot be read.
     pub fn hash(&self) -> Result<String, DenoiseError> {
         let mut files = vec![self.file.clone()];
         for stage in &self.stages {
-            match stage {
-                Stage::Networks(s) if !s.bundle.is_empty() => {
-                    let bundle = self.path(&s.bundle);
-                    files.push(bundle.join(normalnet_net::bundle::MANIFEST));
-                    files.extend(
-                        (0..6).map(|i| bundle.join(normalnet_net::bundle::network_file(i))),
-                    );
-                }
-                Stage::SwitchFit(s) if !s.bundle.is_empty() => {
-                    files.push(self.path(&s.bundle).join(normalnet_net::bundle::MANIFEST));
-                }
-                Stage::Networks(s) => files.push(self.path(&s.config)),
-                Stage::Cnr(s) => files.push(self.path(&s.config)),
-                Stage::Evaluate(s) => files.push(self.path(&s.suite)),
-                _ => {}
-            }
+            files.extend(self.stage_files(stage));
         }
         let mut bytes = Vec::new();
         for f in &files {
-            let content = std::fs::read(f).map_err(|e| recipe_error(f, format!("reading: {e}")))?;
-            bytes.extend_from_slice(&(content.len() as u64).to_le_bytes());
-            bytes.extend_from_slice(&content);
+            append_file(&mut bytes, f)?;
         }
         Ok(format!("{:016x}", crate::suite::fnv1a(&bytes)))
+    }
+
+    /// Per stage, FNV-1a 64 (hex) of the previous stage's hash, the
+    /// stage's definition (as parsed: comments and layout do not count)
+    /// and every file it names. A stage's work in an output folder is kept
+    /// only under the same hash, so an edit reruns the stage it touches
+    /// and every later one, never an earlier one.
+    ///
+    /// # Errors
+    /// A named file that cannot be read.
+    pub fn stage_hashes(&self) -> Result<Vec<String>, DenoiseError> {
+        let mut previous = String::new();
+        let mut hashes = Vec::with_capacity(self.stages.len());
+        for stage in &self.stages {
+            let mut bytes = previous.into_bytes();
+            let definition = serde_json::to_vec(stage)
+                .map_err(|e| self.stage_error(stage.name(), e.to_string()))?;
+            bytes.extend_from_slice(&(definition.len() as u64).to_le_bytes());
+            bytes.extend_from_slice(&definition);
+            for f in self.stage_files(stage) {
+                append_file(&mut bytes, &f)?;
+            }
+            previous = format!("{:016x}", crate::suite::fnv1a(&bytes));
+            hashes.push(previous.clone());
+        }
+        Ok(hashes)
+    }
+
+    /// The files a stage names: its training config, suite, or the bundle
+    /// it takes networks or a table from.
+    fn stage_files(&self, stage: &Stage) -> Vec<PathBuf> {
+        match stage {
+            Stage::Networks(s) if !s.bundle.is_empty() => {
+                let bundle = self.path(&s.bundle);
+                std::iter::once(bundle.join(normalnet_net::bundle::MANIFEST))
+                    .chain((0..6).map(|i| bundle.join(normalnet_net::bundle::network_file(i))))
+                    .collect()
+            }
+            Stage::SwitchFit(s) if !s.bundle.is_empty() => {
+                vec![self.path(&s.bundle).join(normalnet_net::bundle::MANIFEST)]
+            }
+            Stage::Networks(s) => vec![self.path(&s.config)],
+            Stage::Cnr(s) => vec![self.path(&s.config)],
+            Stage::Evaluate(s) => vec![self.path(&s.suite)],
+            Stage::SwitchRows(_) | Stage::SwitchFit(_) => Vec::new(),
+        }
     }
 
     fn stage_error(&self, stage: &str, message: String) -> DenoiseError {

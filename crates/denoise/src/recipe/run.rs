@@ -14,14 +14,38 @@ use crate::DenoiseError;
 
 /// The file that ties an output folder to one recipe (`OUT/recipe-run.toml`).
 const RUN_FILE: &str = "recipe-run.toml";
-/// A stage is done when its folder holds this file.
+/// A stage is done when its folder holds this file ([`StageMark`]).
 const DONE: &str = "DONE";
+/// Written when a stage starts ([`StageMark`]): whose work the folder holds.
+const STARTED: &str = "STARTED";
 
 /// What ties an output folder to a recipe.
 #[derive(Debug, Serialize, Deserialize, PartialEq)]
 struct RunFile {
     recipe: String,
+    /// the recipe's `name` (absent in folders of older builds: the file's stem)
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    name: String,
     hash: String,
+}
+
+/// A stage folder's `DONE` and `STARTED`: the stage and the hash of its
+/// definition ([`Recipe::stage_hashes`]).
+#[derive(Debug, Serialize, Deserialize, PartialEq)]
+struct StageMark {
+    stage: String,
+    hash: String,
+}
+
+/// Where a stage's folder stands against the recipe.
+#[derive(Debug, PartialEq)]
+enum StageState {
+    /// done under the same definition
+    Done,
+    /// started under the same definition (or nothing there yet)
+    Continue,
+    /// holds the work of another definition: cleared and run again
+    Changed,
 }
 
 /// What a finished recipe run gives.
@@ -38,8 +62,10 @@ pub struct RecipeOutcome {
 /// Runs the recipe in `file` into `out`: every stage not yet done, then the
 /// bundle (`OUT/net1..6.safetensors`, `OUT/manifest.toml`, written last),
 /// or for a CNR recipe the model (`OUT/cnr.json`).
-/// Run again on the same folder it continues where it stopped; a folder of
-/// another recipe (or of this one edited since) is refused.
+/// Run again on the same folder it continues where it stopped; after an
+/// edit of the recipe (or of a file it names) the stages the edit changes
+/// and every later one run again from scratch ([`Recipe::stage_hashes`]),
+/// the earlier ones are kept. A folder of another recipe is refused.
 ///
 /// # Errors
 /// [`DenoiseError::Recipe`] naming the recipe or the stage's folder; the
@@ -51,18 +77,37 @@ pub fn run(
 ) -> Result<RecipeOutcome, DenoiseError> {
     let recipe = Recipe::load(file)?;
     let hash = recipe.hash()?;
-    claim(&recipe, &hash, out)?;
+    let stage_hashes = recipe.stage_hashes()?;
+    let unchanged = claim(&recipe, &hash, out)?;
     let cache = out.join("validation-cache");
     let mut ran = Vec::new();
     for (i, stage) in recipe.stages.iter().enumerate() {
         let dir = recipe.stage_dir(out, i);
         let label = format!("{} {}", stage.kind(), stage.name());
-        if dir.join(DONE).is_file() {
-            ran.push((label, false));
-            continue;
+        let mark = StageMark {
+            stage: label.clone(),
+            hash: stage_hashes[i].clone(),
+        };
+        match stage_state(&dir, &mark, unchanged)? {
+            StageState::Done => {
+                // folders of older builds: their DONE gains the hash
+                write_mark(&dir.join(DONE), &mark)?;
+                ran.push((label, false));
+                continue;
+            }
+            StageState::Changed => {
+                progress.message(&format!(
+                    "stage {}/{}: {label} changed since its folder was made: run again",
+                    i + 1,
+                    recipe.stages.len()
+                ));
+                std::fs::remove_dir_all(&dir).map_err(|e| recipe_error(&dir, e.to_string()))?;
+            }
+            StageState::Continue => {}
         }
         progress.message(&format!("stage {}/{}: {label}", i + 1, recipe.stages.len()));
         std::fs::create_dir_all(&dir).map_err(|e| recipe_error(&dir, e.to_string()))?;
+        write_mark(&dir.join(STARTED), &mark)?;
         match stage {
             Stage::Networks(s) => stages::networks(&recipe, s, out, &dir, progress)?,
             Stage::SwitchRows(s) => stages::switch_rows(&recipe, s, out, &dir, progress)?,
@@ -74,7 +119,7 @@ pub fn run(
                 evaluate(&recipe, s, &bundle, &cache, &dir, progress)?;
             }
         }
-        write_file(&dir.join(DONE), label.as_bytes())?;
+        write_mark(&dir.join(DONE), &mark)?;
         ran.push((label, true));
     }
     let manifest = if recipe.makes_cnr() {
@@ -89,35 +134,79 @@ pub fn run(
     })
 }
 
-/// Ties `out` to the recipe (first run) or checks that it is tied to it.
-fn claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<(), DenoiseError> {
+/// Ties `out` to the recipe: refuses a folder of another recipe (another
+/// `name`) and records this one. Returns whether the folder was made by
+/// this recipe as it is now (same hash): then stage marks of older builds,
+/// which carry no hash, are trusted.
+fn claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<bool, DenoiseError> {
     let path = out.join(RUN_FILE);
     let mine = RunFile {
         recipe: recipe.file.display().to_string(),
+        name: recipe.name.clone(),
         hash: hash.to_string(),
     };
-    match std::fs::read_to_string(&path) {
+    let unchanged = match std::fs::read_to_string(&path) {
         Ok(text) => {
             let theirs: RunFile =
                 toml::from_str(&text).map_err(|e| recipe_error(&path, e.to_string()))?;
-            if theirs.hash != mine.hash {
+            let name = if theirs.name.is_empty() {
+                Path::new(&theirs.recipe)
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            } else {
+                theirs.name.clone()
+            };
+            if name != mine.name {
                 return Err(recipe_error(
                     out,
                     format!(
-                        "holds a run of recipe {} (hash {}), not of {} (hash {}): the recipe or a file it names changed; choose another --out or remove this one",
-                        theirs.recipe, theirs.hash, mine.recipe, mine.hash
+                        "holds a run of recipe {name:?} ({}), not of {:?} ({}): choose another --out or remove this one",
+                        theirs.recipe, mine.name, mine.recipe
                     ),
                 ));
             }
-            Ok(())
+            theirs.hash == mine.hash
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             std::fs::create_dir_all(out).map_err(|e| recipe_error(out, e.to_string()))?;
-            let text = toml::to_string(&mine).map_err(|e| recipe_error(&path, e.to_string()))?;
-            write_file(&path, text.as_bytes())
+            true
         }
-        Err(e) => Err(recipe_error(&path, e.to_string())),
-    }
+        Err(e) => return Err(recipe_error(&path, e.to_string())),
+    };
+    let text = toml::to_string(&mine).map_err(|e| recipe_error(&path, e.to_string()))?;
+    write_file(&path, text.as_bytes())?;
+    Ok(unchanged)
+}
+
+/// Where the folder `dir` of a stage whose definition is `mark` stands.
+/// Marks without a hash (older builds) count as this definition's when the
+/// whole recipe is `unchanged`.
+fn stage_state(dir: &Path, mark: &StageMark, unchanged: bool) -> Result<StageState, DenoiseError> {
+    let read = |name: &str| -> Result<Option<bool>, DenoiseError> {
+        let path = dir.join(name);
+        match std::fs::read_to_string(&path) {
+            Ok(text) => Ok(Some(match toml::from_str::<StageMark>(&text) {
+                Ok(theirs) => theirs == *mark,
+                Err(_) => unchanged,
+            })),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(recipe_error(&path, e.to_string())),
+        }
+    };
+    Ok(match (read(DONE)?, read(STARTED)?) {
+        (Some(true), _) => StageState::Done,
+        (Some(false), _) | (None, Some(false)) => StageState::Changed,
+        (None, Some(true)) => StageState::Continue,
+        // work of an older build, or none
+        (None, None) if unchanged || !dir.exists() => StageState::Continue,
+        (None, None) => StageState::Changed,
+    })
+}
+
+fn write_mark(path: &Path, mark: &StageMark) -> Result<(), DenoiseError> {
+    let text = toml::to_string(mark).map_err(|e| recipe_error(path, e.to_string()))?;
+    write_file(path, text.as_bytes())
 }
 
 /// `OUT/cnr.json`: the last `cnr` stage's model, its training notes ending

@@ -57,7 +57,25 @@ epochs = 2
         (0.35, 20, true)
     );
     assert!(r.stage_dir(Path::new("out"), 2).ends_with("stages/03-fit"));
-    // the hash covers the config the recipe names
+    // the stage hashes: comments and layout do not count, an edit changes
+    // the edited stage's and every later one's, never an earlier one's
+    let stages = r.stage_hashes().unwrap();
+    let whole = r.hash().unwrap();
+    assert_eq!(stages.len(), 3);
+    let commented = text.replace("epochs = 2", "# fewer\nepochs   =   2");
+    let same = recipe_in(dir.path(), &commented).unwrap();
+    assert_eq!(same.stage_hashes().unwrap(), stages);
+    assert_ne!(same.hash().unwrap(), whole, "the whole hash reads the text");
+    let edited = recipe_in(
+        dir.path(),
+        &text.replace("iterations = 2", "iterations = 3"),
+    )
+    .unwrap();
+    let changed = edited.stage_hashes().unwrap();
+    assert_eq!(changed[0], stages[0]);
+    assert!(changed[1] != stages[1] && changed[2] != stages[2]);
+    // the hash covers the config the recipe names, and so does the first
+    // stage's (and with it every later one's)
     let before = r.hash().unwrap();
     std::fs::write(
         dir.path().join("train.toml"),
@@ -65,6 +83,8 @@ epochs = 2
     )
     .unwrap();
     assert_ne!(r.hash().unwrap(), before);
+    let retrained = r.stage_hashes().unwrap();
+    assert!(retrained.iter().zip(&stages).all(|(a, b)| a != b));
 }
 
 #[test]
