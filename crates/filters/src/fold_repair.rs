@@ -198,20 +198,16 @@ impl<'a> FoldCheck<'a> {
     }
 }
 
-/// The share of `mesh`'s faces that are folded by themselves: the
-/// [`FoldCheck`] of its own positions against themselves, counted over its
-/// faces (0 for a mesh without faces; a degenerate face, whose normal is
-/// zero, counts as folded). Noise along the normals folds few faces (fish
-/// at 0.1 l_e: 0.01 %); noise with a tangential part (random directions, a
-/// scanner's view direction) folds many (springer, random directions at
-/// 0.5 l_e: 27 %). `normalnet info` prints it; NormalNet's switch reads the
-/// per-face flags (`normalnet_net::switch::Candidates::folded`).
-pub fn folded_share(mesh: &Mesh, topology: &Topology) -> f64 {
-    if mesh.faces.is_empty() {
-        return 0.0;
-    }
-    let check = FoldCheck::new(&mesh.positions, &mesh.faces, topology);
-    check.count(&mesh.positions) as f64 / mesh.faces.len() as f64
+/// How many of `mesh`'s faces are folded by themselves: the [`FoldCheck`]
+/// of its own positions against themselves (a degenerate face, whose
+/// normal is zero, counts as folded). Noise along the normals folds few
+/// faces (fish at 0.1 l_e: 0.01 %); noise with a tangential part (random
+/// directions, a scanner's view direction) folds many (springer, random
+/// directions at 0.5 l_e: 27 %). `normalnet info` prints it; NormalNet's
+/// switch reads the per-face flags
+/// (`normalnet_net::switch::Candidates::folded`).
+pub fn self_folded_faces(mesh: &Mesh, topology: &Topology) -> usize {
+    FoldCheck::new(&mesh.positions, &mesh.faces, topology).count(&mesh.positions)
 }
 
 /// [`repair_folds`] on `input` without its outlier vertices
@@ -598,10 +594,10 @@ mod tests {
     }
 
     #[test]
-    fn the_folded_share_counts_the_faces_a_crossed_vertex_folds() {
+    fn the_self_folded_faces_are_those_a_crossed_vertex_turns_over() {
         let m = grid();
         let t = Topology::new(m.num_vertices(), &m.faces);
-        assert_eq!(folded_share(&m, &t), 0.0);
+        assert_eq!(self_folded_faces(&m, &t), 0);
         // one inner vertex moved across two rings: its own mesh is folded
         let mut folded = m.clone();
         folded.positions[3 * 7 + 3][0] += 2.5;
@@ -615,10 +611,7 @@ mod tests {
         // of its six triangles the two whose far edge it crossed turn over
         // (the others only stretch), and no other face folds
         assert_eq!((fan.len(), folded_fan.len(), count), (6, 2, 2), "{flags:?}");
-        assert_eq!(
-            folded_share(&folded, &t),
-            count as f64 / m.num_faces() as f64
-        );
+        assert_eq!(self_folded_faces(&folded, &t), count);
     }
 
     #[test]

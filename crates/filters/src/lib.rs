@@ -30,7 +30,7 @@ pub use bi::{Bi, BiParams, bi};
 pub use bilateral::{Bnf, BnfParams, bnf};
 pub use driver::{NormalFilter, Passes, Schedule, run_filter};
 pub use error::FilterError;
-pub use fold_repair::{FoldCheck, FoldReport, folded_share, repair_folds, repair_mesh_folds};
+pub use fold_repair::{FoldCheck, FoldReport, repair_folds, repair_mesh_folds, self_folded_faces};
 pub use gnf::{Gnf, GnfParams, gnf};
 pub use gt_guided::{
     GT_GUIDED_SIGMA_S, GtGuidedGnfParams, gt_guided_gnf, gt_guided_normals, try_gt_guided_normals,

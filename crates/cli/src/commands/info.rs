@@ -3,12 +3,13 @@
 //! and non-manifold edges, non-manifold (bow-tie) vertices, edges traversed
 //! twice in the same direction (inconsistent orientation), degenerate and
 //! duplicate faces, unreferenced vertices; and the folded faces
-//! (`normalnet_filters::FoldCheck` of the mesh against itself: a sign of
-//! noise with a tangential part; degenerate faces count as folded too).
+//! (`normalnet_filters::self_folded_faces`, the fold check of the mesh
+//! against itself: a sign of noise with a tangential part; degenerate faces
+//! count as folded too).
 
 use crate::input::read_mesh_as;
 use anyhow::Context;
-use normalnet_filters::FoldCheck;
+use normalnet_filters::self_folded_faces;
 use normalnet_mesh::Topology;
 use normalnet_mesh::io::Format;
 use normalnet_mesh::validate::validate;
@@ -54,8 +55,7 @@ pub fn run(args: Args, _quiet: bool) -> anyhow::Result<()> {
     let load = t.elapsed().as_secs_f64();
     let r = validate(&mesh);
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-    let folded_faces =
-        FoldCheck::new(&mesh.positions, &mesh.faces, &topology).count(&mesh.positions);
+    let folded_faces = self_folded_faces(&mesh, &topology);
     let folded = folded_faces as f64 / mesh.num_faces().max(1) as f64;
     let mut out = std::io::stdout().lock();
     if args.json {
