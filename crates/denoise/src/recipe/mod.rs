@@ -53,6 +53,16 @@
 //! bundle = "../../models/lite"   # its main table (late = true: its late one)
 //! ```
 //!
+//! and a `networks` stage may pick, per network slot, the network of an
+//! earlier `networks` stage:
+//!
+//! ```toml
+//! [[stage]]
+//! kind = "networks"
+//! name = "mixed"
+//! slots = ["broad", "broad", "broad", "shipped", "shipped", "shipped"]
+//! ```
+//!
 //! A CNR recipe has one stage instead, which trains the model on a
 //! training config's sources (`configs/recipes/cnr.toml`):
 //!
@@ -162,6 +172,11 @@ pub struct NetworksStage {
     /// recipe that refits only the switch of a shipped bundle
     #[serde(default)]
     pub bundle: String,
+    /// per network slot (six), the earlier `networks` stage whose network
+    /// serves it, instead of `config` or `bundle`: a bundle that keeps
+    /// some networks of one stage and takes others from another
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slots: Vec<String>,
 }
 
 /// Stage `switch_rows`.
@@ -470,6 +485,7 @@ impl Recipe {
             Stage::SwitchFit(s) if !s.bundle.is_empty() => {
                 vec![self.path(&s.bundle).join(normalnet_net::bundle::MANIFEST)]
             }
+            Stage::Networks(s) if !s.slots.is_empty() => Vec::new(),
             Stage::Networks(s) => vec![self.path(&s.config)],
             Stage::Cnr(s) => vec![self.path(&s.config)],
             Stage::Evaluate(s) => vec![self.path(&s.suite)],
@@ -559,7 +575,7 @@ impl Recipe {
         }
         for stage in &self.stages {
             let sources = match stage {
-                Stage::Networks(s) if !s.bundle.is_empty() => continue,
+                Stage::Networks(s) if !s.bundle.is_empty() || !s.slots.is_empty() => continue,
                 Stage::Networks(s) => self.train_config(s)?.sources,
                 Stage::Cnr(s) => self.cnr_config(s)?.sources,
                 Stage::SwitchRows(s) => s.pairs.clone(),
@@ -606,6 +622,7 @@ impl Recipe {
     /// stages, the files it names).
     fn check_stage(&self, i: usize) -> Result<(), DenoiseError> {
         match &self.stages[i] {
+            Stage::Networks(s) if !s.slots.is_empty() => self.check_slots(i, s),
             Stage::Networks(s) if !s.bundle.is_empty() => self.check_taken_networks(i, s),
             Stage::Networks(s) => self.check_networks(i, s),
             Stage::SwitchRows(s) => self.check_rows(i, s),
@@ -625,6 +642,26 @@ impl Recipe {
             ));
         }
         self.bundle_manifest(i, &s.bundle)?;
+        Ok(())
+    }
+
+    fn check_slots(&self, i: usize, s: &NetworksStage) -> Result<(), DenoiseError> {
+        let bad = |message: String| self.stage_error(&s.name, message);
+        if !s.config.is_empty() || !s.continue_from.is_empty() || !s.bundle.is_empty() {
+            return Err(bad(
+                "a stage takes its networks from `slots`, `bundle` or `config`, one of them".into(),
+            ));
+        }
+        if s.slots.len() != normalnet_net::bundle::INTERVALS.len() {
+            return Err(bad(format!(
+                "slots names {} stages, one per network: {}",
+                s.slots.len(),
+                normalnet_net::bundle::INTERVALS.len()
+            )));
+        }
+        for from in &s.slots {
+            self.earlier(i, from, "networks", "slots")?;
+        }
         Ok(())
     }
 

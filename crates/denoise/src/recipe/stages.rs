@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use normalnet_mesh::Progress;
 use normalnet_net::Bundle;
-use normalnet_net::bundle::{MANIFEST, network_file};
+use normalnet_net::bundle::{MANIFEST, Manifest, network_file};
 use normalnet_net::switch::SwitchWeights;
 use normalnet_net::switch_fit::{FitParams, ROW_LEN, fit};
 use normalnet_net::switch_rows::{TracePath, TraceSettings, read_rows, trace, write_rows};
@@ -38,6 +38,9 @@ pub(super) fn networks(
     dir: &Path,
     progress: &dyn Progress,
 ) -> Result<(), DenoiseError> {
+    if !stage.slots.is_empty() {
+        return mix_networks(recipe, stage, out, dir);
+    }
     if !stage.bundle.is_empty() {
         return copy_networks(recipe, stage, dir);
     }
@@ -66,6 +69,66 @@ fn copy_networks(recipe: &Recipe, stage: &NetworksStage, dir: &Path) -> Result<(
             .map_err(|e| recipe_error(&from.join(&name), format!("reading: {e}")))?;
         write_file(&dir.join(&name), &bytes)?;
     }
+    manifest.write(&dir.join(MANIFEST))?;
+    Ok(())
+}
+
+/// `networks` with `slots`: per slot the network of the named earlier
+/// stage, with its manifest entry; the rest of the manifest is the first
+/// slot's stage's, its notes saying where each network came from. The
+/// stages must agree on everything the networks are read with (preset,
+/// architecture, voxel grid, outputs, intervals, int8 ranges).
+fn mix_networks(
+    recipe: &Recipe,
+    stage: &NetworksStage,
+    out: &Path,
+    dir: &Path,
+) -> Result<(), DenoiseError> {
+    let fail = |m: String| recipe_error(dir, format!("stage {:?}: {m}", stage.name));
+    let source = |name: &str| recipe.stage_dir(out, recipe.index_of(name).expect("checked"));
+    let manifests = stage
+        .slots
+        .iter()
+        .map(|name| Manifest::read(&source(name).join(MANIFEST)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut manifest = manifests[0].clone();
+    let reads = |m: &Manifest| {
+        (
+            m.preset.clone(),
+            m.model.clone(),
+            m.voxel,
+            m.mu_gs.clone(),
+            m.intervals.clone(),
+            m.int8_range,
+        )
+    };
+    for (k, (name, m)) in stage.slots.iter().zip(&manifests).enumerate() {
+        if reads(m) != reads(&manifest) {
+            return Err(fail(format!(
+                "slot {}: stage {name:?}'s networks are not read as stage {:?}'s (preset, architecture, voxel grid, outputs, intervals or int8 ranges differ)",
+                k + 1,
+                stage.slots[0]
+            )));
+        }
+        let file = network_file(k);
+        let bytes = std::fs::read(source(name).join(&file))
+            .map_err(|e| recipe_error(&source(name).join(&file), format!("reading: {e}")))?;
+        write_file(&dir.join(&file), &bytes)?;
+        manifest.networks[k] = m.networks[k].clone();
+    }
+    let by_slot: Vec<String> = stage
+        .slots
+        .iter()
+        .enumerate()
+        .map(|(k, name)| format!("{} from stage {name}", k + 1))
+        .collect();
+    manifest.training.notes = format!(
+        "networks by slot: {}; the training below is stage {}'s. {}",
+        by_slot.join(", "),
+        stage.slots[0],
+        manifest.training.notes
+    );
+    manifest.switch = None;
     manifest.write(&dir.join(MANIFEST))?;
     Ok(())
 }

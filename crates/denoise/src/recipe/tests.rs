@@ -269,3 +269,119 @@ late = true
         assert!(err.contains(expected), "{err}");
     }
 }
+
+/// `slots`: per network slot the network of an earlier `networks` stage,
+/// with its manifest entry; stages whose networks are read differently,
+/// or slots that are not six earlier networks stages, are refused.
+#[test]
+fn a_recipe_mixes_the_networks_of_two_stages_by_slot() {
+    use normalnet_net::bundle::{MANIFEST, Manifest, network_file};
+    let lite = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lite");
+    let dir = tempfile::tempdir().unwrap();
+    // a second bundle: the shipped one with its entries marked
+    let other = dir.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    for i in 0..6 {
+        std::fs::copy(lite.join(network_file(i)), other.join(network_file(i))).unwrap();
+    }
+    let mut marked = Manifest::read(&lite.join(MANIFEST)).unwrap();
+    for n in &mut marked.networks {
+        n.steps = 12_345;
+    }
+    marked.write(&other.join(MANIFEST)).unwrap();
+    let stages = |slots: &str| {
+        format!(
+            "name = \"t\"
+[[stage]]
+kind = \"networks\"
+name = \"a\"
+bundle = {lite:?}
+
+[[stage]]
+kind = \"networks\"
+name = \"b\"
+bundle = {other:?}
+
+[[stage]]
+kind = \"networks\"
+name = \"mixed\"
+slots = {slots}
+",
+            lite = lite.display().to_string(),
+            other = other.display().to_string()
+        )
+    };
+    let r = recipe_in(dir.path(), &stages(r#"["a", "b", "a", "b", "b", "a"]"#)).unwrap();
+    let out = dir.path().join("out");
+    let manifest = run(&r.file, &out, &normalnet_mesh::NoProgress)
+        .unwrap()
+        .manifest
+        .unwrap();
+    let shipped = Manifest::read(&lite.join(MANIFEST)).unwrap();
+    for (k, from_b) in [false, true, false, true, true, false].iter().enumerate() {
+        let want = if *from_b {
+            12_345
+        } else {
+            shipped.networks[k].steps
+        };
+        assert_eq!(manifest.networks[k].steps, want, "slot {}", k + 1);
+        assert!(
+            std::fs::read(out.join(network_file(k))).unwrap()
+                == std::fs::read(lite.join(network_file(k))).unwrap()
+        );
+    }
+    assert!(
+        manifest
+            .training
+            .notes
+            .starts_with("networks by slot: 1 from stage a, 2 from stage b")
+    );
+    assert!(manifest.switch.is_none());
+    for (slots, expected) in [
+        (r#"["a", "b"]"#, "slots names 2 stages"),
+        (
+            r#"["a", "b", "a", "b", "a", "c"]"#,
+            "\"c\" is no earlier networks stage",
+        ),
+        (
+            r#"["a", "b", "a", "b", "a", "mixed"]"#,
+            "\"mixed\" is no earlier networks stage",
+        ),
+    ] {
+        let err = recipe_in(dir.path(), &stages(slots))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(expected), "{err}");
+    }
+    let both = stages(r#"["a", "b", "a", "b", "a", "b"]"#).replace(
+        "name = \"mixed\"\n",
+        "name = \"mixed\"\nconfig = \"train.toml\"\n",
+    );
+    let err = recipe_in(dir.path(), &both).unwrap_err().to_string();
+    assert!(err.contains("one of them"), "{err}");
+    // networks read differently (another preset) are refused when the stage runs
+    let tiny = dir.path().join("tiny");
+    let nets: Vec<_> = (0..6)
+        .map(|i| normalnet_net::ModelConfig::tiny().init_weights(i))
+        .collect();
+    normalnet_net::bundle::save_bundle(
+        &tiny,
+        &normalnet_net::bundle::new_manifest("tiny").unwrap(),
+        &nets,
+    )
+    .unwrap();
+    std::fs::remove_dir_all(&other).unwrap();
+    std::fs::rename(&tiny, &other).unwrap();
+    let r = recipe_in(dir.path(), &stages(r#"["a", "b", "a", "b", "a", "b"]"#)).unwrap();
+    let err = run(
+        &r.file,
+        &dir.path().join("out2"),
+        &normalnet_mesh::NoProgress,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("slot 2: stage \"b\"'s networks are not read as stage \"a\"'s"),
+        "{err}"
+    );
+}
