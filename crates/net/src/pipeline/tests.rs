@@ -322,16 +322,21 @@ fn the_learned_switch_blends_candidates_and_is_optional() {
     assert!(largest < 1e-9, "moved {largest}");
 }
 
-#[test]
-fn with_the_fold_rule_the_switch_moves_only_around_folded_faces() {
-    let clean = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+/// `clean` with the first vertex of face 0 pushed through the surface by
+/// three mean edge lengths: its fan folds.
+fn pushed_through(clean: &Mesh) -> Mesh {
     let topology = Topology::new(clean.num_vertices(), &clean.faces);
-    // one vertex pushed through the surface: its fan folds
-    let l = normalnet_mesh::geometry::mean_edge_length(&clean, &topology);
+    let l = normalnet_mesh::geometry::mean_edge_length(clean, &topology);
     let v = clean.faces[0][0] as usize;
-    let n = face_normals(&clean)[0];
+    let n = face_normals(clean)[0];
     let mut mesh = clean.clone();
     mesh.positions[v] = vec3::sub(mesh.positions[v], vec3::scale(n, 3.0 * l));
+    mesh
+}
+
+#[test]
+fn with_the_fold_rule_the_switch_moves_only_around_folded_faces() {
+    let mesh = pushed_through(&normalnet_voxel::shapes::generate_seeded(5, 200).unwrap());
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
     let mut bundle = tiny_bundle();
     let mut stay = crate::switch::tests::constant(3);
@@ -552,11 +557,7 @@ fn traced_rows_can_leave_out_the_folded_faces() {
     use crate::switch_rows::{TracePath, TraceSettings, trace};
     let clean = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
     let topology = Topology::new(clean.num_vertices(), &clean.faces);
-    let l = normalnet_mesh::geometry::mean_edge_length(&clean, &topology);
-    let v = clean.faces[0][0] as usize;
-    let n = face_normals(&clean)[0];
-    let mut noisy = clean.clone();
-    noisy.positions[v] = vec3::sub(noisy.positions[v], vec3::scale(n, 3.0 * l));
+    let noisy = pushed_through(&clean);
     let folded = normalnet_filters::FoldCheck::new(&noisy.positions, &noisy.faces, &topology)
         .folded(&noisy.positions)
         .iter()
