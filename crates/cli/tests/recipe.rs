@@ -185,6 +185,21 @@ fn issue_35_a_killed_recipe_run_resumes_to_the_bundle_of_an_uninterrupted_one() 
     let file = edited.join("smoke.toml");
     let text = std::fs::read_to_string(&file).unwrap();
     std::fs::write(&file, text.replace("epochs = 3", "epochs = 4")).unwrap();
+    // --plan says so before anything runs
+    let plan = |file: &Path| {
+        let o = normalnet(&["train", "--recipe", s(file), "--out", s(&killed), "--plan"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let planned = plan(&file);
+    for line in [
+        "networks networks: done",
+        "switch_rows rows: done",
+        "switch_fit switch: changed",
+        "evaluate validation: changed",
+    ] {
+        assert!(planned.contains(line), "{planned}");
+    }
     let o = normalnet(&["train", "-q", "--recipe", s(&file), "--out", s(&killed)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
@@ -211,6 +226,7 @@ fn issue_35_a_killed_recipe_run_resumes_to_the_bundle_of_an_uninterrupted_one() 
         manifest_without_clock(&killed)
     );
     // run again unchanged: nothing runs
+    assert!(!plan(&file).contains("changed") && !plan(&file).contains(": run"));
     let o = normalnet(&["train", "-q", "--recipe", s(&file), "--out", s(&killed)]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!String::from_utf8_lossy(&o.stdout).contains(": ran"));

@@ -29,6 +29,10 @@ pub struct Args {
     /// bundle; run again with the same --out it continues where it stopped.
     #[arg(long)]
     pub recipe: Option<PathBuf>,
+    /// With --recipe: print what a run on --out would do with each stage
+    /// (done, continue, run, changed: cleared and run again) and stop
+    #[arg(long, requires = "recipe")]
+    pub plan: bool,
     /// Continue an interrupted run in --out (normalnet).
     #[arg(long)]
     pub resume: bool,
@@ -100,6 +104,13 @@ fn train_recipe(recipe: &std::path::Path, args: &Args, quiet: bool) -> anyhow::R
         anyhow::bail!(
             "--recipe takes no --preset, --resume or --method: the recipe says what to train, and a run always resumes"
         );
+    }
+    if args.plan {
+        let mut out = std::io::stdout().lock();
+        for (stage, what) in normalnet_denoise::recipe::plan(recipe, &args.out)? {
+            writeln!(out, "  {stage}: {what}")?;
+        }
+        return Ok(());
     }
     crate::output::check_dir(&args.out)?;
     let bar = crate::progress::Bar::new(quiet);

@@ -91,7 +91,7 @@ mod evaluate;
 mod run;
 mod stages;
 
-pub use run::{RecipeOutcome, run};
+pub use run::{RecipeOutcome, plan, run};
 
 use std::path::{Path, PathBuf};
 

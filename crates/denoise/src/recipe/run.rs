@@ -139,13 +139,28 @@ pub fn run(
 /// this recipe as it is now (same hash): then stage marks of older builds,
 /// which carry no hash, are trusted.
 fn claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<bool, DenoiseError> {
+    let unchanged = check_claim(recipe, hash, out)?;
+    std::fs::create_dir_all(out).map_err(|e| recipe_error(out, e.to_string()))?;
     let path = out.join(RUN_FILE);
-    let mine = RunFile {
+    let mine = run_file(recipe, hash);
+    let text = toml::to_string(&mine).map_err(|e| recipe_error(&path, e.to_string()))?;
+    write_file(&path, text.as_bytes())?;
+    Ok(unchanged)
+}
+
+fn run_file(recipe: &Recipe, hash: &str) -> RunFile {
+    RunFile {
         recipe: recipe.file.display().to_string(),
         name: recipe.name.clone(),
         hash: hash.to_string(),
-    };
-    let unchanged = match std::fs::read_to_string(&path) {
+    }
+}
+
+/// [`claim`] without writing anything.
+fn check_claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<bool, DenoiseError> {
+    let path = out.join(RUN_FILE);
+    let mine = run_file(recipe, hash);
+    match std::fs::read_to_string(&path) {
         Ok(text) => {
             let theirs: RunFile =
                 toml::from_str(&text).map_err(|e| recipe_error(&path, e.to_string()))?;
@@ -166,17 +181,43 @@ fn claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<bool, DenoiseError> 
                     ),
                 ));
             }
-            theirs.hash == mine.hash
+            Ok(theirs.hash == mine.hash)
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            std::fs::create_dir_all(out).map_err(|e| recipe_error(out, e.to_string()))?;
-            true
-        }
-        Err(e) => return Err(recipe_error(&path, e.to_string())),
-    };
-    let text = toml::to_string(&mine).map_err(|e| recipe_error(&path, e.to_string()))?;
-    write_file(&path, text.as_bytes())?;
-    Ok(unchanged)
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(true),
+        Err(e) => Err(recipe_error(&path, e.to_string())),
+    }
+}
+
+/// What [`run`] would do with each stage of the recipe in `file` on the
+/// folder `out`, without doing anything: per stage its kind and name and
+/// `done` (kept), `continue` (started under this definition: resumes),
+/// `run` (not started) or `changed` (holds the work of another definition:
+/// cleared and run again).
+///
+/// # Errors
+/// As [`run`] before its first stage: the recipe, the files it names, a
+/// folder of another recipe.
+pub fn plan(file: &Path, out: &Path) -> Result<Vec<(String, &'static str)>, DenoiseError> {
+    let recipe = Recipe::load(file)?;
+    let unchanged = check_claim(&recipe, &recipe.hash()?, out)?;
+    let hashes = recipe.stage_hashes()?;
+    let mut plan = Vec::with_capacity(recipe.stages.len());
+    for (i, stage) in recipe.stages.iter().enumerate() {
+        let dir = recipe.stage_dir(out, i);
+        let label = format!("{} {}", stage.kind(), stage.name());
+        let mark = StageMark {
+            stage: label.clone(),
+            hash: hashes[i].clone(),
+        };
+        let what = match stage_state(&dir, &mark, unchanged)? {
+            StageState::Done => "done",
+            StageState::Changed => "changed",
+            StageState::Continue if dir.exists() => "continue",
+            StageState::Continue => "run",
+        };
+        plan.push((label, what));
+    }
+    Ok(plan)
 }
 
 /// Where the folder `dir` of a stage whose definition is `mark` stands.
