@@ -29,6 +29,7 @@
 //! An application-level library: its errors are `anyhow` chains, because a
 //! failed cell of the report keeps the whole chain as its text.
 
+pub mod compare;
 mod inputs;
 mod picture;
 mod run;

@@ -54,6 +54,9 @@ enum Command {
     Train(commands::train::Args),
     /// Run methods over noisy/clean pairs and write the comparison table.
     Bench(commands::bench::Args),
+    /// Compare two bench runs of one suite: per group the mean E_a of each,
+    /// the difference and who wins.
+    Compare(commands::compare::Args),
     /// Render a mesh to PNG (optionally coloured by error against GT).
     Render(commands::render::Args),
     /// Describe a NormalNet model bundle (the built-in one by default), or
@@ -109,6 +112,7 @@ fn run(command: Command, quiet: bool) -> anyhow::Result<()> {
         Command::Bench(a) => {
             output::check_dir(&a.out).and_then(|()| commands::bench::run(a, quiet))
         }
+        Command::Compare(a) => commands::compare::run(a, quiet),
         Command::Denoise(a) => commands::denoise::run(*a, quiet),
         Command::Batch(a) => output::check_dir(&a.out).and_then(|()| {
             // a rerun after a SIGKILL: the killed run's temporary file goes

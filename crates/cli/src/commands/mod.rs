@@ -2,6 +2,7 @@
 
 pub mod batch;
 pub mod bench;
+pub mod compare;
 pub mod dataset;
 pub mod denoise;
 pub mod info;
