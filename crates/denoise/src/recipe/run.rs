@@ -77,21 +77,17 @@ pub fn run(
 ) -> Result<RecipeOutcome, DenoiseError> {
     let recipe = Recipe::load(file)?;
     let hash = recipe.hash()?;
-    let stage_hashes = recipe.stage_hashes()?;
+    let marks = stage_marks(&recipe)?;
     let unchanged = claim(&recipe, &hash, out)?;
     let cache = out.join("validation-cache");
     let mut ran = Vec::new();
-    for (i, stage) in recipe.stages.iter().enumerate() {
+    for (i, (stage, mark)) in recipe.stages.iter().zip(&marks).enumerate() {
         let dir = recipe.stage_dir(out, i);
-        let label = format!("{} {}", stage.kind(), stage.name());
-        let mark = StageMark {
-            stage: label.clone(),
-            hash: stage_hashes[i].clone(),
-        };
-        match stage_state(&dir, &mark, unchanged)? {
+        let label = mark.stage.clone();
+        match stage_state(&dir, mark, unchanged)? {
             StageState::Done => {
                 // folders of older builds: their DONE gains the hash
-                write_mark(&dir.join(DONE), &mark)?;
+                write_mark(&dir.join(DONE), mark)?;
                 ran.push((label, false));
                 continue;
             }
@@ -107,7 +103,7 @@ pub fn run(
         }
         progress.message(&format!("stage {}/{}: {label}", i + 1, recipe.stages.len()));
         std::fs::create_dir_all(&dir).map_err(|e| recipe_error(&dir, e.to_string()))?;
-        write_mark(&dir.join(STARTED), &mark)?;
+        write_mark(&dir.join(STARTED), mark)?;
         match stage {
             Stage::Networks(s) => stages::networks(&recipe, s, out, &dir, progress)?,
             Stage::SwitchRows(s) => stages::switch_rows(&recipe, s, out, &dir, progress)?,
@@ -119,7 +115,7 @@ pub fn run(
                 evaluate(&recipe, s, &bundle, &cache, &dir, progress)?;
             }
         }
-        write_mark(&dir.join(DONE), &mark)?;
+        write_mark(&dir.join(DONE), mark)?;
         ran.push((label, true));
     }
     let manifest = if recipe.makes_cnr() {
@@ -200,24 +196,31 @@ fn check_claim(recipe: &Recipe, hash: &str, out: &Path) -> Result<bool, DenoiseE
 pub fn plan(file: &Path, out: &Path) -> Result<Vec<(String, &'static str)>, DenoiseError> {
     let recipe = Recipe::load(file)?;
     let unchanged = check_claim(&recipe, &recipe.hash()?, out)?;
-    let hashes = recipe.stage_hashes()?;
     let mut plan = Vec::with_capacity(recipe.stages.len());
-    for (i, stage) in recipe.stages.iter().enumerate() {
+    for (i, mark) in stage_marks(&recipe)?.into_iter().enumerate() {
         let dir = recipe.stage_dir(out, i);
-        let label = format!("{} {}", stage.kind(), stage.name());
-        let mark = StageMark {
-            stage: label.clone(),
-            hash: hashes[i].clone(),
-        };
         let what = match stage_state(&dir, &mark, unchanged)? {
             StageState::Done => "done",
             StageState::Changed => "changed",
             StageState::Continue if dir.exists() => "continue",
             StageState::Continue => "run",
         };
-        plan.push((label, what));
+        plan.push((mark.stage, what));
     }
     Ok(plan)
+}
+
+/// Per stage its mark: `kind name` and the hash of its definition.
+fn stage_marks(recipe: &Recipe) -> Result<Vec<StageMark>, DenoiseError> {
+    Ok(recipe
+        .stages
+        .iter()
+        .zip(recipe.stage_hashes()?)
+        .map(|(stage, hash)| StageMark {
+            stage: format!("{} {}", stage.kind(), stage.name()),
+            hash,
+        })
+        .collect())
 }
 
 /// Where the folder `dir` of a stage whose definition is `mark` stands.

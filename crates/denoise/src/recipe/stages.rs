@@ -64,13 +64,18 @@ fn copy_networks(recipe: &Recipe, stage: &NetworksStage, dir: &Path) -> Result<(
     let manifest = recipe.bundle_manifest(i, &stage.bundle)?;
     let from = recipe.path(&stage.bundle);
     for k in 0..manifest.networks.len() {
-        let name = network_file(k);
-        let bytes = std::fs::read(from.join(&name))
-            .map_err(|e| recipe_error(&from.join(&name), format!("reading: {e}")))?;
-        write_file(&dir.join(&name), &bytes)?;
+        copy_network(&from, k, dir)?;
     }
     manifest.write(&dir.join(MANIFEST))?;
     Ok(())
+}
+
+/// Network `k`'s weight file of the bundle folder `from`, copied into `dir`.
+fn copy_network(from: &Path, k: usize, dir: &Path) -> Result<(), DenoiseError> {
+    let name = network_file(k);
+    let bytes = std::fs::read(from.join(&name))
+        .map_err(|e| recipe_error(&from.join(&name), format!("reading: {e}")))?;
+    write_file(&dir.join(&name), &bytes)
 }
 
 /// `networks` with `slots`: per slot the network of the named earlier
@@ -110,10 +115,7 @@ fn mix_networks(
                 stage.slots[0]
             )));
         }
-        let file = network_file(k);
-        let bytes = std::fs::read(source(name).join(&file))
-            .map_err(|e| recipe_error(&source(name).join(&file), format!("reading: {e}")))?;
-        write_file(&dir.join(&file), &bytes)?;
+        copy_network(&source(name), k, dir)?;
         manifest.networks[k] = m.networks[k].clone();
     }
     let by_slot: Vec<String> = stage
