@@ -156,6 +156,7 @@ fn the_shipped_recipes_load() {
     for name in [
         "lite.toml",
         "lite-broad.toml",
+        "lite-broad-cad.toml",
         "lite-heavy-switch.toml",
         "lite-narrow.toml",
         "smoke.toml",
