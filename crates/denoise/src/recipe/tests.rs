@@ -157,6 +157,7 @@ fn the_shipped_recipes_load() {
         "lite.toml",
         "lite-broad.toml",
         "lite-broad-cad.toml",
+        "lite-broad-regen.toml",
         "lite-heavy-switch.toml",
         "lite-narrow.toml",
         "smoke.toml",
