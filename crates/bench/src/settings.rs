@@ -231,6 +231,18 @@ mod tests {
         s.params(model, column).unwrap().1
     }
 
+    /// A recipe's `evaluate` stage runs NormalNet as `normalnet bench
+    /// --suite` does, so its figures compare with bench runs.
+    #[test]
+    fn recipe_evaluation_runs_the_bench_settings() {
+        let s = Settings::parse(BUILTIN_SETTINGS, "builtin").unwrap();
+        let (bench, _) = s.denoiser("a-suite-pair", NORMALNET).unwrap();
+        let params = normalnet_denoise::recipe::evaluate_params(&Params::new());
+        let stage = Denoiser::new(NORMALNET, &params).unwrap();
+        assert_eq!(bench.parameters(), stage.parameters());
+        assert_eq!(stage.parameters()["auto_stop_deg"], 0.0);
+    }
+
     #[test]
     fn builtin_settings_parse_and_apply_table_2() {
         let s = Settings::parse(BUILTIN_SETTINGS, "builtin").unwrap();

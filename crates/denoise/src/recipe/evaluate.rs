@@ -15,6 +15,21 @@ use crate::{DenoiseError, Denoiser, Params};
 /// The file an `evaluate` stage writes its figures to.
 pub(super) const EVALUATION_FILE: &str = "evaluation.toml";
 
+/// The NormalNet parameters an `evaluate` stage runs with: those of
+/// `normalnet bench --suite` (`configs/bench.toml`'s `[defaults.normalnet]`:
+/// the denoiser's defaults with the auto stop off, a test in
+/// `normalnet-bench` holds the two together), then the stage's own
+/// `params` over them, so a stage's figures are the bench's on the same
+/// suite and bundle.
+pub fn evaluate_params(stage_params: &Params) -> Params {
+    let mut params = Params::new();
+    params.insert("auto_stop_deg".into(), 0.0.into());
+    for (key, value) in stage_params {
+        params.insert(key.clone(), value.clone());
+    }
+    params
+}
+
 /// Runs the bundle in `bundle` on the stage's suite (pairs generated into
 /// `cache`) and writes `DIR/evaluation.toml`.
 pub(super) fn evaluate(
@@ -30,7 +45,7 @@ pub(super) fn evaluate(
     let suite_file = recipe.path(&stage.suite);
     let suite = Suite::load(&suite_file)?;
     let prepared = suite.prepare(cache, progress)?;
-    let mut params: Params = stage.params.clone();
+    let mut params = evaluate_params(&stage.params);
     params.insert("model".into(), bundle.display().to_string().into());
     let denoiser = Denoiser::new("normalnet", &params)?;
     let mut pairs = BTreeMap::new();
@@ -58,14 +73,10 @@ pub(super) fn evaluate(
     let evaluation = Evaluation {
         suite: stage.suite.clone(),
         suite_hash: format!("{:016x}", crate::suite::fnv1a(&suite_bytes)),
-        settings: if stage.params.is_empty() {
-            "normalnet at its defaults".into()
-        } else {
-            format!(
-                "normalnet with {}",
-                serde_json::Value::Object(stage.params.clone())
-            )
-        },
+        settings: format!(
+            "normalnet with {} (normalnet bench's settings)",
+            serde_json::Value::Object(evaluate_params(&stage.params))
+        ),
         all_deg: mean(&mut suite.pairs.iter().map(|p| p.name.as_str())),
         groups,
         pairs,

@@ -91,6 +91,7 @@ mod evaluate;
 mod run;
 mod stages;
 
+pub use evaluate::evaluate_params;
 pub use run::{RecipeOutcome, plan, run};
 
 use std::path::{Path, PathBuf};
@@ -285,7 +286,8 @@ pub struct EvaluateStage {
     pub name: String,
     /// the validation suite (relative to the recipe's folder)
     pub suite: String,
-    /// NormalNet parameters laid over its defaults (as `bench.toml`'s)
+    /// NormalNet parameters laid over `normalnet bench`'s
+    /// ([`evaluate_params`])
     #[serde(default)]
     pub params: serde_json::Map<String, serde_json::Value>,
 }
@@ -463,6 +465,12 @@ impl Recipe {
                 .map_err(|e| self.stage_error(stage.name(), e.to_string()))?;
             bytes.extend_from_slice(&(definition.len() as u64).to_le_bytes());
             bytes.extend_from_slice(&definition);
+            if let Stage::Evaluate(s) = stage {
+                // what it runs with, so a change of the settings reruns it
+                let params = serde_json::to_vec(&evaluate_params(&s.params))
+                    .map_err(|e| self.stage_error(stage.name(), e.to_string()))?;
+                bytes.extend_from_slice(&params);
+            }
             for f in self.stage_files(stage) {
                 append_file(&mut bytes, &f)?;
             }
