@@ -158,6 +158,7 @@ fn the_shipped_recipes_load() {
         "lite-broad.toml",
         "lite-broad-cad.toml",
         "lite-broad-regen.toml",
+        "lite-mix3-refit.toml",
         "lite-heavy-switch.toml",
         "lite-narrow.toml",
         "smoke.toml",
