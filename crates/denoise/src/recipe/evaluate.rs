@@ -45,7 +45,8 @@ pub(super) fn evaluate(
     let suite_file = recipe.path(&stage.suite);
     let suite = Suite::load(&suite_file)?;
     let prepared = suite.prepare(cache, progress)?;
-    let mut params = evaluate_params(&stage.params);
+    let settings = evaluate_params(&stage.params);
+    let mut params = settings.clone();
     params.insert("model".into(), bundle.display().to_string().into());
     let denoiser = Denoiser::new("normalnet", &params)?;
     let mut pairs = BTreeMap::new();
@@ -75,7 +76,7 @@ pub(super) fn evaluate(
         suite_hash: format!("{:016x}", crate::suite::fnv1a(&suite_bytes)),
         settings: format!(
             "normalnet with {} (normalnet bench's settings)",
-            serde_json::Value::Object(evaluate_params(&stage.params))
+            serde_json::Value::Object(settings)
         ),
         all_deg: mean(&mut suite.pairs.iter().map(|p| p.name.as_str())),
         groups,
