@@ -145,6 +145,7 @@ fn issue_35_a_killed_recipe_run_resumes_to_the_bundle_of_an_uninterrupted_one() 
     for key in [
         "[switch]",
         "[switch.late]",
+        "[switch.heavy]",
         "[recipe]",
         "[evaluation]",
         "hash = \"",

@@ -27,7 +27,10 @@
 //! A bundle's switch may carry a second, late table (`[switch.late]`,
 //! [`SwitchWeights::late`]) for the iterations after the main table's
 //! `max_iteration`: long runs (the Table 2 settings run 20–25 iterations)
-//! without changing the default 10-iteration run.
+//! without changing the default 10-iteration run; and a table for noisy
+//! runs (`[switch.heavy]`, [`HeavyTable`]) that replaces the main table for
+//! a whole run when its input's noise level (feature 9 of the first
+//! iteration) is high ([`SwitchWeights::for_run`]).
 
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_pass};
 use normalnet_filters::{FoldCheck, Gnf, GnfParams, NormalFilter};
@@ -35,6 +38,7 @@ use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{FaceGeometry, Mesh, Topology};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// The iteration feature's place in a feature row.
 pub const ITERATION_FEATURE: usize = 8;
@@ -60,6 +64,10 @@ pub fn feature_as_read(j: usize, x: f64, max_iteration: usize) -> f64 {
 
 /// Features per face.
 pub const NUM_FEATURES: usize = 12;
+
+/// The noise level's place in a feature row: the median over the mesh of
+/// each face's mean angle to its 1-ring (feature 6), the same in every row.
+pub const NOISE_LEVEL_FEATURE: usize = 9;
 
 /// The candidates, in the switch's output order.
 pub const CANDIDATES: [&str; 4] = ["network", "guided", "gnf", "current"];
@@ -115,6 +123,27 @@ pub struct SwitchWeights {
     /// clamped. The default run (10 iterations) never reaches it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub late: Option<Box<SwitchWeights>>,
+    /// the table of noisy runs (`[switch.heavy]`): a run whose first
+    /// iteration's noise level reaches its threshold uses it instead of
+    /// this table for every iteration up to `max_iteration`
+    /// ([`SwitchWeights::for_run`]). Read from the main table only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heavy: Option<Box<HeavyTable>>,
+}
+
+/// A switch table for noisy runs and where they start (issue 34). Tables
+/// refitted with heavy-noise rows win heavy noise (the shipped table keeps
+/// almost every face in place from iteration 2–3 at 0.6–0.8 l_e) but lose
+/// mild and moderate noise; the run's noise level, known in its first
+/// iteration, says which of the two it is.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeavyTable {
+    /// runs whose noise level ([`NOISE_LEVEL_FEATURE`] in iteration 1,
+    /// radians) is at least this use `table`
+    pub from_noise_level: f64,
+    /// the table; the main table's late table and fold rule apply to its
+    /// runs too, so it has neither
+    pub table: SwitchWeights,
 }
 
 impl SwitchWeights {
@@ -150,8 +179,27 @@ impl SwitchWeights {
         if self.std.iter().any(|s| *s <= 0.0) {
             return Err("switch: std must be positive".into());
         }
+        if let Some(heavy) = &self.heavy {
+            let t = &heavy.table;
+            if !(heavy.from_noise_level.is_finite() && heavy.from_noise_level > 0.0) {
+                return Err("switch.heavy: from_noise_level must be a positive angle".into());
+            }
+            if t.heavy.is_some() || t.late.is_some() || t.network_on_folds {
+                return Err("switch.heavy: its table takes the main table's late table and fold rule; it has none of its own".into());
+            }
+            if t.max_iteration != self.max_iteration {
+                return Err(format!(
+                    "switch.heavy: max_iteration {} differs from the main table's {} (where the late table takes over)",
+                    t.max_iteration, self.max_iteration
+                ));
+            }
+            t.validate()
+                .map_err(|e| e.replacen("switch", "switch.heavy", 1))?;
+        }
         match &self.late {
-            Some(late) if late.late.is_some() => Err("switch.late: late tables do not nest".into()),
+            Some(late) if late.late.is_some() || late.heavy.is_some() => {
+                Err("switch.late: late tables do not nest".into())
+            }
             Some(late) if late.network_on_folds => Err(
                 "switch.late: network_on_folds belongs to [switch], whose rule covers every iteration"
                     .into(),
@@ -160,6 +208,22 @@ impl SwitchWeights {
                 .validate()
                 .map_err(|e| e.replacen("switch", "switch.late", 1)),
             None => Ok(()),
+        }
+    }
+
+    /// The table of a run whose first iteration has noise level
+    /// `noise_level` ([`NOISE_LEVEL_FEATURE`]): this one, or from the heavy
+    /// table's threshold on that table with this one's late table and fold
+    /// rule.
+    pub fn for_run(&self, noise_level: f64) -> Cow<'_, SwitchWeights> {
+        match &self.heavy {
+            Some(heavy) if noise_level >= heavy.from_noise_level => {
+                let mut table = heavy.table.clone();
+                table.late.clone_from(&self.late);
+                table.network_on_folds = self.network_on_folds;
+                Cow::Owned(table)
+            }
+            _ => Cow::Borrowed(self),
         }
     }
 
@@ -392,6 +456,7 @@ pub(crate) mod tests {
             notes: String::new(),
             network_on_folds: false,
             late: None,
+            heavy: None,
         }
     }
 
@@ -467,6 +532,69 @@ pub(crate) mod tests {
         nested.late = Some(Box::new(constant(2)));
         w.late = Some(Box::new(nested));
         assert!(w.validate().unwrap_err().contains("do not nest"));
+    }
+
+    #[test]
+    fn a_heavy_table_switches_the_runs_whose_noise_level_reaches_its_threshold() {
+        let mut w = constant(1);
+        w.network_on_folds = true;
+        w.late = Some(Box::new(constant(3)));
+        w.heavy = Some(Box::new(HeavyTable {
+            from_noise_level: 1.0,
+            table: constant(2),
+        }));
+        assert!(w.validate().is_ok());
+        let best = |w: &SwitchWeights, k: f64| {
+            let mut x = [0.0; NUM_FEATURES];
+            x[ITERATION_FEATURE] = k;
+            let p = w.probabilities(&x);
+            (0..NUM_CANDIDATES)
+                .max_by(|&a, &b| p[a].total_cmp(&p[b]))
+                .unwrap()
+        };
+        // below the threshold the main table itself, from it the heavy one
+        // with the main table's late table and fold rule
+        assert!(matches!(w.for_run(0.99), Cow::Borrowed(t) if std::ptr::eq(t, &w)));
+        let heavy = w.for_run(1.0);
+        assert_eq!((best(&heavy, 1.0), best(&heavy, 10.0)), (2, 2));
+        assert_eq!(best(&heavy, 11.0), 3);
+        assert!(heavy.network_on_folds && heavy.heavy.is_none());
+        assert_eq!(best(&w.for_run(0.5), 1.0), 1);
+        // written and read back as [switch.heavy] inside [switch]
+        #[derive(Serialize, Deserialize)]
+        struct Manifest {
+            switch: SwitchWeights,
+        }
+        let text = toml::to_string(&Manifest { switch: w.clone() }).unwrap();
+        assert!(text.contains("[switch.heavy]") && text.contains("from_noise_level = 1.0"));
+        let back: Manifest = toml::from_str(&text).unwrap();
+        assert_eq!(back.switch, w);
+        assert!(!toml::to_string(&constant(1)).unwrap().contains("heavy"));
+        // the heavy table has no late table, fold rule or heavy table of
+        // its own, and a positive threshold; a bad one is named
+        let refused = |edit: fn(&mut HeavyTable), expected: &str| {
+            let mut bad = w.clone();
+            edit(bad.heavy.as_mut().unwrap());
+            let err = bad.validate().unwrap_err();
+            assert!(err.contains(expected), "{err}");
+        };
+        refused(
+            |h| h.table.late = Some(Box::new(constant(0))),
+            "none of its own",
+        );
+        refused(|h| h.table.network_on_folds = true, "none of its own");
+        refused(|h| h.from_noise_level = 0.0, "positive");
+        refused(
+            |h| h.table.max_iteration = 5,
+            "differs from the main table's",
+        );
+        refused(|h| h.from_noise_level = f64::NAN, "positive");
+        refused(
+            |h| {
+                h.table.b1.pop();
+            },
+            "switch.heavy: b1",
+        );
     }
 
     #[test]

@@ -181,6 +181,7 @@ pub fn fit(
         notes: String::new(),
         network_on_folds: false,
         late: None,
+        heavy: None,
     };
     weights.validate()?;
     Ok((

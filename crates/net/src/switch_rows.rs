@@ -23,7 +23,8 @@ use crate::NetError;
 use crate::bundle::{Bundle, network_for_iteration};
 use crate::pipeline::{filtered_normals, take_flat_means};
 use crate::switch::{
-    self, ITERATION_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchState, SwitchWeights,
+    self, ITERATION_FEATURE, NOISE_LEVEL_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchState,
+    SwitchWeights,
 };
 use crate::switch_fit::ROW_LEN;
 
@@ -131,6 +132,8 @@ pub fn trace(
     let mut positions = noisy.positions.clone();
     let mut buffers = VertexUpdateBuffers::default();
     let mut previous: Option<Vec<Vec3>> = None;
+    // the learned path's table for this run, chosen in its first iteration
+    let mut run_table: Option<std::borrow::Cow<'_, SwitchWeights>> = None;
     let mut state = SwitchState::new(noisy, &topology, settings.mu_g);
     let mut out = Trace::default();
     for k in 1..=settings.iterations {
@@ -187,7 +190,10 @@ pub fn trace(
                     c.normals[best][f]
                 })
                 .collect(),
-            TracePath::Learned(w) => {
+            TracePath::Learned(main) => {
+                let w = &**run_table.get_or_insert_with(|| {
+                    main.for_run(features.first().map_or(0.0, |x| x[NOISE_LEVEL_FEATURE]))
+                });
                 for (f, x) in features.iter().enumerate() {
                     let best = if w.network_on_folds && c.folded[f] {
                         switch::NETWORK

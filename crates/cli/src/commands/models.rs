@@ -147,8 +147,15 @@ pub fn describe(bundle: &Bundle) -> String {
                 ),
                 None => String::new(),
             };
+            let heavy = match &w.heavy {
+                Some(heavy) => format!(
+                    "\n            runs with noise level ≥ {:.3} rad in iteration 1: a heavy-noise table, {} hidden units; {}",
+                    heavy.from_noise_level, heavy.table.hidden, heavy.table.notes
+                ),
+                None => String::new(),
+            };
             line(format!(
-                "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){notes}{late}",
+                "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){notes}{heavy}{late}",
                 w.hidden,
                 normalnet_net::switch::CANDIDATES.join(", "),
             ))

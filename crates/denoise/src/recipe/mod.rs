@@ -79,8 +79,10 @@
 //! its hash and the commit.
 //!
 //! The bundle in `DIR` takes the networks of the last `networks` stage,
-//! the `[switch]` table of the last `switch_fit` stage (and `[switch.late]`
-//! of the last one with `late = true`) and the figures of the last
+//! the `[switch]` table of the last main `switch_fit` stage (with
+//! `[switch.late]` of the last one after it with `late = true`, and
+//! `[switch.heavy]` of the last one after it with `heavy_from`) and the
+//! figures of the last
 //! `evaluate` stage; its manifest's `[recipe]` records the recipe, its hash
 //! (the recipe and every file it names) and the commit. Each stage works in
 //! `DIR/stages/NN-name/` and is done when its `DONE` file holds the
@@ -266,6 +268,13 @@ pub struct FitStage {
     /// table's clamp) instead of the main one
     #[serde(default)]
     pub late: bool,
+    /// a table for noisy runs (`[switch.heavy]`) instead of the main one:
+    /// runs whose noise level in iteration 1 (the switch's feature 9,
+    /// radians) is at least this use it in place of the main table
+    /// (`normalnet_net::switch::HeavyTable`); it takes the main table's
+    /// late table and fold rule
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heavy_from: Option<f64>,
     /// the table takes the network's output on folded faces
     /// (`normalnet_net::switch::SwitchWeights::network_on_folds`): `true`
     /// turns the rule on, `false` off; unset, a fitted table has it off and
@@ -276,6 +285,13 @@ pub struct FitStage {
     /// written into the table's `notes`
     #[serde(default)]
     pub notes: String,
+}
+
+impl FitStage {
+    /// Whether the stage makes a main table (not a late or a heavy one).
+    pub fn is_main(&self) -> bool {
+        !self.late && self.heavy_from.is_none()
+    }
 }
 
 /// Stage `evaluate`.
@@ -623,7 +639,7 @@ impl Recipe {
     fn main_table_before(&self, i: usize) -> bool {
         self.stages[..i]
             .iter()
-            .any(|t| matches!(t, Stage::SwitchFit(f) if !f.late))
+            .any(|t| matches!(t, Stage::SwitchFit(f) if f.is_main()))
     }
 
     /// Checks stage `i` alone (its values, its references to earlier
@@ -720,12 +736,25 @@ impl Recipe {
         Ok(())
     }
 
-    /// The fold rule belongs to main tables.
-    fn check_fold_rule(&self, s: &FitStage) -> Result<(), DenoiseError> {
-        if s.late && s.network_on_folds.is_some() {
-            return Err(self.stage_error(
-                &s.name,
-                "network_on_folds is set on the main table, whose rule covers the late table's iterations".into(),
+    /// The fold rule belongs to main tables; a late or heavy table needs
+    /// an earlier main one; a table is one of the three.
+    fn check_table_kind(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
+        let bad = |message: &str| Err(self.stage_error(&s.name, message.into()));
+        if s.late && s.heavy_from.is_some() {
+            return bad("a table is late or heavy, not both");
+        }
+        if !s.is_main() && s.network_on_folds.is_some() {
+            return bad(
+                "network_on_folds is set on the main table, whose rule covers the late and heavy tables' runs",
+            );
+        }
+        if s.heavy_from.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
+            return bad("heavy_from must be a positive angle (radians)");
+        }
+        if !s.is_main() && !self.main_table_before(i) {
+            let kind = if s.late { "late" } else { "heavy" };
+            return bad(&format!(
+                "a {kind} table needs an earlier main switch_fit stage"
             ));
         }
         Ok(())
@@ -733,7 +762,7 @@ impl Recipe {
 
     fn check_taken_table(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
         let bad = |message: String| self.stage_error(&s.name, message);
-        self.check_fold_rule(s)?;
+        self.check_table_kind(i, s)?;
         if !s.rows.is_empty() {
             return Err(bad(
                 "a stage takes its table from `bundle` or fits it on `rows`, not both".into(),
@@ -752,17 +781,12 @@ impl Recipe {
                 if s.late { "late" } else { "main" }
             )));
         }
-        if s.late && !self.main_table_before(i) {
-            return Err(bad(
-                "a late table needs an earlier main switch_fit stage".into()
-            ));
-        }
         Ok(())
     }
 
     fn check_fit(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
         let bad = |message: String| self.stage_error(&s.name, message);
-        self.check_fold_rule(s)?;
+        self.check_table_kind(i, s)?;
         if s.rows.is_empty() {
             return Err(bad("no rows stages".into()));
         }
@@ -783,11 +807,6 @@ impl Recipe {
         if s.late && s.min_iteration <= 1 {
             return Err(bad(
                 "a late table is fitted on the iterations after the main table's clamp: set min_iteration".into(),
-            ));
-        }
-        if s.late && !self.main_table_before(i) {
-            return Err(bad(
-                "a late table needs an earlier main switch_fit stage".into()
             ));
         }
         Ok(())

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use normalnet_mesh::Progress;
 use normalnet_net::Bundle;
 use normalnet_net::bundle::{MANIFEST, Manifest, network_file};
-use normalnet_net::switch::SwitchWeights;
+use normalnet_net::switch::{HeavyTable, SwitchWeights};
 use normalnet_net::switch_fit::{FitParams, ROW_LEN, fit};
 use normalnet_net::switch_rows::{TracePath, TraceSettings, read_rows, trace, write_rows};
 use normalnet_net::training::{TrainConfig, noisy_pairs, train};
@@ -305,6 +305,7 @@ pub(super) fn switch_fit(
                 .ok_or_else(|| fail(&"the bundle has no late table"))?,
         };
         table.late = None;
+        table.heavy = None;
         if let Some(on) = stage.network_on_folds {
             table.network_on_folds = on;
         }
@@ -363,8 +364,8 @@ pub(super) fn switch_fit(
 }
 
 /// The switch made by the `switch_fit` stages up to and including `upto`:
-/// the last main table, with the last late table fitted after it; none
-/// without a main table.
+/// the last main table, with the last late and heavy tables fitted after
+/// it; none without a main table.
 pub(super) fn switch_upto(
     recipe: &Recipe,
     out: &Path,
@@ -381,12 +382,21 @@ pub(super) fn switch_upto(
         let table = toml::from_str::<SwitchFile>(&text)
             .map_err(|e| recipe_error(&file, e.to_string()))?
             .switch;
-        if fit.late {
-            if let Some(m) = main.as_mut() {
-                m.late = Some(Box::new(table));
+        // (a late or heavy table follows a main one: checked at load)
+        match (main.as_mut(), fit.heavy_from) {
+            _ if fit.is_main() => main = Some(table),
+            (Some(m), _) if fit.late => m.late = Some(Box::new(table)),
+            (Some(m), Some(from)) => {
+                let table = SwitchWeights {
+                    network_on_folds: false,
+                    ..table
+                };
+                m.heavy = Some(Box::new(HeavyTable {
+                    from_noise_level: from,
+                    table,
+                }));
             }
-        } else {
-            main = Some(table);
+            _ => {}
         }
     }
     Ok(main)

@@ -125,6 +125,28 @@ fn bad_recipes_are_refused_naming_the_stage() {
         "stage \"late\": network_on_folds is set on the main table",
     );
     refused(
+        "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = [{ mesh = \"shape:1\", gaussian = [0.3] }]\n[[stage]]\nkind = \"switch_fit\"\nname = \"heavy\"\nrows = [\"rows\"]\nheavy_from = 1.0\n",
+        "a heavy table needs an earlier main switch_fit stage",
+    );
+    for (extra, expected) in [
+        (
+            "heavy_from = 1.0\nnetwork_on_folds = true\n",
+            "network_on_folds is set on the main table",
+        ),
+        (
+            "heavy_from = 1.0\nlate = true\nmin_iteration = 11\n",
+            "late or heavy, not both",
+        ),
+        ("heavy_from = -1.0\n", "heavy_from must be a positive angle"),
+    ] {
+        refused(
+            &format!(
+                "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = [{{ mesh = \"shape:1\", gaussian = [0.3] }}]\n[[stage]]\nkind = \"switch_fit\"\nname = \"main\"\nrows = [\"rows\"]\n[[stage]]\nkind = \"switch_fit\"\nname = \"heavy\"\nrows = [\"rows\"]\n{extra}"
+            ),
+            expected,
+        );
+    }
+    refused(
         "[[stage]]\nkind = \"evaluate\"\nname = \"e\"\nsuite = \"missing.toml\"\n",
         "missing.toml",
     );
@@ -159,6 +181,7 @@ fn the_shipped_recipes_load() {
         "lite-broad-cad.toml",
         "lite-broad-regen.toml",
         "lite-mix3-refit.toml",
+        "lite-mix3-heavy.toml",
         "lite-heavy-switch.toml",
         "lite-narrow.toml",
         "smoke.toml",

@@ -7,13 +7,17 @@ use normalnet_mesh::{Mesh, Topology};
 
 use super::params::{Form, GuidedLimit};
 use super::skips::Selection;
-use crate::switch::{self, SwitchState};
+use crate::switch::{self, NOISE_LEVEL_FEATURE, SwitchState, SwitchWeights};
+use std::borrow::Cow;
 
 /// A [`Form`] with what it carries from one iteration to the next (the
 /// switch's GNF state).
 pub struct Chooser<'a> {
     form: Form<'a>,
     switch_state: Option<SwitchState>,
+    /// the switch table of this run, chosen in its first iteration
+    /// ([`switch::SwitchWeights::for_run`])
+    run_table: Option<Cow<'a, SwitchWeights>>,
 }
 
 /// The filtered normals of one iteration, and with the switch the shares of
@@ -32,7 +36,11 @@ impl<'a> Chooser<'a> {
     pub fn new(form: Form<'a>, mesh: &Mesh, topology: &Topology, mu_g: f64) -> Chooser<'a> {
         let switch_state =
             matches!(form, Form::Switch(_)).then(|| SwitchState::new(mesh, topology, mu_g));
-        Chooser { form, switch_state }
+        Chooser {
+            form,
+            switch_state,
+            run_table: None,
+        }
     }
 
     /// The filtered normals of iteration `k` of `current` from the network's
@@ -62,7 +70,11 @@ impl<'a> Chooser<'a> {
                 let state = self.switch_state.as_mut().expect("made with the switch");
                 let candidates = state.candidates(current, topology, normals);
                 let features = switch::features(topology, &candidates, k);
-                let (blended, stays) = switch::blend_with_stays(weights, &candidates, &features);
+                let table = self.run_table.get_or_insert_with(|| {
+                    let noise_level = features.first().map_or(0.0, |x| x[NOISE_LEVEL_FEATURE]);
+                    weights.for_run(noise_level)
+                });
+                let (blended, stays) = switch::blend_with_stays(table, &candidates, &features);
                 let counted = |f: usize| !selection.is_reused(f);
                 let n = blended.len();
                 let stay = (0..n).filter(|&f| stays[f] && counted(f)).count();

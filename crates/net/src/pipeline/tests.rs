@@ -322,6 +322,45 @@ fn the_learned_switch_blends_candidates_and_is_optional() {
     assert!(largest < 1e-9, "moved {largest}");
 }
 
+#[test]
+fn a_run_whose_noise_level_reaches_the_heavy_threshold_uses_the_heavy_table() {
+    use crate::switch::tests::constant;
+    use crate::switch::{HeavyTable, NOISE_LEVEL_FEATURE, SwitchState, features};
+    let mut bundle = tiny_bundle();
+    let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    // the mesh's noise level, as the run's first iteration sees it
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let mut state = SwitchState::new(&mesh, &topology, 0.3);
+    let c = state.candidates(&mesh, &topology, face_normals(&mesh));
+    let level = features(&topology, &c, 1)[0][NOISE_LEVEL_FEATURE];
+    assert!(level > 0.0);
+    let params = DenoiseParams {
+        iterations: 2,
+        vertex_iterations: 3,
+        auto_stop_deg: 0.0,
+        ..DenoiseParams::default()
+    };
+    let run = |bundle: &Bundle| denoise(&mesh, bundle, &params, &NoProgress).unwrap().0;
+    // main table "stay", heavy table the network's output
+    let with_heavy = |from_noise_level: f64| {
+        let mut main = constant(3);
+        main.heavy = Some(Box::new(HeavyTable {
+            from_noise_level,
+            table: constant(0),
+        }));
+        Some(main)
+    };
+    bundle.manifest.switch = Some(constant(3));
+    let stay = run(&bundle).positions;
+    bundle.manifest.switch = Some(constant(0));
+    let network = run(&bundle).positions;
+    assert_ne!(stay, network);
+    bundle.manifest.switch = with_heavy(level * 1.01);
+    assert_eq!(run(&bundle).positions, stay, "below the threshold: main");
+    bundle.manifest.switch = with_heavy(level);
+    assert_eq!(run(&bundle).positions, network, "from it: heavy");
+}
+
 /// `clean` with the first vertex of face 0 pushed through the surface by
 /// three mean edge lengths: its fan folds.
 fn pushed_through(clean: &Mesh) -> Mesh {
