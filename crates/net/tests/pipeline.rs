@@ -296,3 +296,102 @@ fn the_shipped_training_configs_are_valid() {
         dir.display()
     );
 }
+
+/// Progress that keeps its messages and, with `stop_at = n`, panics at the
+/// n-th mesh regeneration it is told of (a stop in the middle of moving the
+/// meshes on to the next network's state).
+#[derive(Default)]
+struct Recorder {
+    messages: std::sync::Mutex<Vec<String>>,
+    stop_at: Option<usize>,
+}
+
+impl normalnet_mesh::Progress for Recorder {
+    fn message(&self, text: &str) {
+        let mut m = self.messages.lock().unwrap();
+        m.push(text.to_string());
+        let regenerations = m.iter().filter(|t| is_regeneration(t)).count();
+        if self.stop_at == Some(regenerations) {
+            drop(m);
+            panic!("stopped while regenerating");
+        }
+    }
+}
+
+/// A message of one mesh's regeneration ("regenerating NAME (N passes)").
+fn is_regeneration(text: &str) -> bool {
+    text.starts_with("regenerating ") && text.ends_with("passes)")
+}
+
+#[test]
+fn a_run_stopped_while_regenerating_keeps_the_meshes_it_had_moved_on() {
+    let config = tiny_config();
+    let reference = tempfile::tempdir().unwrap();
+    let all = Recorder::default();
+    let want = train(&config, reference.path(), false, &all).unwrap();
+    let regenerated = all
+        .messages
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|t| is_regeneration(t))
+        .count();
+    // three meshes (two sources, one validation) moved on after each of
+    // networks 1..5
+    assert_eq!(regenerated, 3 * 5);
+
+    // stopped at the second mesh after network 1: the first one's state is saved
+    let stopped = tempfile::tempdir().unwrap();
+    let stop = Recorder {
+        stop_at: Some(2),
+        ..Recorder::default()
+    };
+    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&config, stopped.path(), false, &stop)
+    }));
+    assert!(run.is_err(), "the run went on past the stop");
+    let states = stopped.path().join("states");
+    assert!(states.join("stage1_0.obj").is_file());
+    assert!(!states.join("stage1_1.obj").is_file());
+    assert!(stopped.path().join("state.toml").is_file());
+
+    // resumed: the saved mesh is taken back, not regenerated, and the
+    // bundle is the uninterrupted run's
+    let resumed = Recorder::default();
+    let got = train(&config, stopped.path(), true, &resumed).unwrap();
+    let again = resumed
+        .messages
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|t| is_regeneration(t))
+        .count();
+    assert_eq!(again, regenerated - 1);
+    let without_clock = |m: &normalnet_net::bundle::Manifest| {
+        let mut n = m.networks.clone();
+        n.iter_mut().for_each(|n| n.train_seconds = 0.0);
+        n
+    };
+    assert_eq!(without_clock(&got), without_clock(&want));
+    for k in 0..6 {
+        let file = normalnet_net::bundle::network_file(k);
+        assert_eq!(
+            std::fs::read(reference.path().join(&file)).unwrap(),
+            std::fs::read(stopped.path().join(&file)).unwrap(),
+            "network {}",
+            k + 1
+        );
+    }
+
+    // a new run in the same folder takes nothing back
+    let fresh = Recorder::default();
+    train(&config, stopped.path(), false, &fresh).unwrap();
+    let anew = fresh
+        .messages
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|t| is_regeneration(t))
+        .count();
+    assert_eq!(anew, regenerated);
+}

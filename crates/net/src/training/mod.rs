@@ -21,7 +21,10 @@
 //! The run is resumable: every few minutes the current weights, Adam state
 //! and step are written to `OUT/checkpoint/step-S/` (and `OUT/state.toml`); the best weights (lowest
 //! validation error) to `OUT/netK.safetensors`; the mesh states `M_k` to
-//! `OUT/states/`. `--resume` continues where it stopped.
+//! `OUT/states/`, each as soon as it is made (moving a few million faces on
+//! through a network takes hours on two cores: a run stopped in the middle
+//! keeps the meshes it had moved on). `--resume` continues where it stopped;
+//! a new run in the same folder removes the old states.
 
 mod config;
 mod pairs;

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use normalnet_cnn::{Cnn, NetWeights};
-use normalnet_mesh::Progress;
+use normalnet_mesh::{Mesh, Progress};
 use normalnet_samples::{BalancedSampler, Loader, LoaderConfig, SampleRef, SampleSource};
 use normalnet_voxel::VoxelParams;
 use serde::{Deserialize, Serialize};
@@ -153,8 +153,16 @@ impl<'a> Run<'a> {
         progress: &'a dyn Progress,
     ) -> Result<Run<'a>, NetError> {
         std::fs::create_dir_all(out.join("checkpoint")).map_err(|e| NetError::io(out, e))?;
-        std::fs::create_dir_all(out.join("states")).map_err(|e| NetError::io(out, e))?;
+        let states = out.join("states");
+        std::fs::create_dir_all(&states).map_err(|e| NetError::io(out, e))?;
         let state = RunState::read_or_new(out, resume)?;
+        if !resume || !out.join("state.toml").is_file() {
+            // a new run: no state of an earlier run is taken back, and a
+            // stop from here on resumes (the recipe resumes a stage whose
+            // folder has state.toml)
+            remove_states(&states)?;
+            state.save(out)?;
+        }
         write_atomically(
             &out.join("config.toml"),
             toml::to_string_pretty(config)
@@ -210,12 +218,10 @@ impl<'a> Run<'a> {
         }
         let states = self.out.join("states");
         for (i, p) in self.pairs.iter_mut().chain(&mut self.val_pairs).enumerate() {
-            let file = states.join(format!("stage{stage}_{i}.obj"));
-            if file.is_file() {
-                let m = normalnet_mesh::read_mesh(&file)?;
-                if m.faces == p.state.faces && m.num_vertices() == p.state.num_vertices() {
-                    p.state = m;
-                }
+            if let Some(saved) =
+                saved_state(&states.join(format!("stage{stage}_{i}.obj")), &p.state)?
+            {
+                p.state = saved;
             }
         }
         Ok(())
@@ -480,8 +486,10 @@ impl<'a> Run<'a> {
 
     /// Moves the training and validation meshes from the state network `k`
     /// (0-based) meets to the next network's (`regenerate` for the passes
-    /// of network `k`'s interval) and saves them in `OUT/states/` for
-    /// `--resume`.
+    /// of network `k`'s interval), saving each in `OUT/states/` as soon as
+    /// it is done: a run stopped in between takes the saved ones back and
+    /// regenerates only the others (a pass of the CNN over a few million
+    /// faces takes hours on two cores).
     fn advance_meshes(&mut self, net: &NetWeights, k: usize) -> Result<(), NetError> {
         let engine = self
             .config
@@ -493,9 +501,15 @@ impl<'a> Run<'a> {
         let passes = INTERVALS[k + 1].0 - INTERVALS[k].0;
         self.progress
             .message(&format!("regenerating meshes with network {}", k + 1));
-        for set in [&mut self.pairs, &mut self.val_pairs] {
+        let states = self.out.join("states");
+        for (i, p) in self.pairs.iter_mut().chain(&mut self.val_pairs).enumerate() {
+            let file = states.join(format!("stage{}_{i}.obj", k + 1));
+            if let Some(saved) = saved_state(&file, &p.state)? {
+                p.state = saved;
+                continue;
+            }
             regenerate(
-                set,
+                std::slice::from_mut(p),
                 &engine,
                 self.config.residual(k),
                 self.voxel,
@@ -503,10 +517,7 @@ impl<'a> Run<'a> {
                 self.config.inference_batch,
                 self.progress,
             )?;
-        }
-        let states = self.out.join("states");
-        for (i, p) in self.pairs.iter().chain(&self.val_pairs).enumerate() {
-            normalnet_mesh::write_mesh(states.join(format!("stage{}_{i}.obj", k + 1)), &p.state)?;
+            normalnet_mesh::write_mesh(&file, &p.state)?;
         }
         Ok(())
     }
@@ -708,4 +719,28 @@ fn append_log(
         fmt(val)
     )
     .map_err(|e| NetError::io(path, e))
+}
+
+/// The state saved in `file` for a mesh now at `state`, if there is one
+/// of the same mesh (the same faces and vertex count; files are written
+/// whole, so a stop never leaves half of one).
+fn saved_state(file: &Path, state: &Mesh) -> Result<Option<Mesh>, NetError> {
+    if !file.is_file() {
+        return Ok(None);
+    }
+    let saved = normalnet_mesh::read_mesh(file)?;
+    let same = saved.faces == state.faces && saved.num_vertices() == state.num_vertices();
+    Ok(same.then_some(saved))
+}
+
+/// Removes the mesh states (`*.obj`) of an earlier run from `states`.
+fn remove_states(states: &Path) -> Result<(), NetError> {
+    let entries = std::fs::read_dir(states).map_err(|e| NetError::io(states, e))?;
+    for entry in entries {
+        let path = entry.map_err(|e| NetError::io(states, e))?.path();
+        if path.extension().is_some_and(|e| e == "obj") {
+            std::fs::remove_file(&path).map_err(|e| NetError::io(&path, e))?;
+        }
+    }
+    Ok(())
 }
