@@ -501,18 +501,21 @@ pub(crate) mod tests {
         assert_eq!(back.max_iteration, DEFAULT_MAX_ITERATION);
     }
 
+    /// The candidate `w` weighs most in iteration `k` (other features 0).
+    fn best_at(w: &SwitchWeights, k: f64) -> usize {
+        let mut x = [0.0; NUM_FEATURES];
+        x[ITERATION_FEATURE] = k;
+        let p = w.probabilities(&x);
+        (0..NUM_CANDIDATES)
+            .max_by(|&a, &b| p[a].total_cmp(&p[b]))
+            .unwrap()
+    }
+
     #[test]
     fn a_late_table_switches_the_iterations_after_the_clamp() {
         let mut w = constant(1);
         w.late = Some(Box::new(constant(2)));
-        let at = |w: &SwitchWeights, k: f64| {
-            let mut x = [0.0; NUM_FEATURES];
-            x[ITERATION_FEATURE] = k;
-            let p = w.probabilities(&x);
-            (0..NUM_CANDIDATES)
-                .max_by(|&a, &b| p[a].total_cmp(&p[b]))
-                .unwrap()
-        };
+        let at = best_at;
         assert_eq!((at(&w, 1.0), at(&w, 10.0)), (1, 1));
         assert_eq!((at(&w, 11.0), at(&w, 25.0)), (2, 2));
         // written and read back as a [switch.late] table inside [switch]
@@ -544,14 +547,7 @@ pub(crate) mod tests {
             table: constant(2),
         }));
         assert!(w.validate().is_ok());
-        let best = |w: &SwitchWeights, k: f64| {
-            let mut x = [0.0; NUM_FEATURES];
-            x[ITERATION_FEATURE] = k;
-            let p = w.probabilities(&x);
-            (0..NUM_CANDIDATES)
-                .max_by(|&a, &b| p[a].total_cmp(&p[b]))
-                .unwrap()
-        };
+        let best = best_at;
         // below the threshold the main table itself, from it the heavy one
         // with the main table's late table and fold rule
         assert!(matches!(w.for_run(0.99), Cow::Borrowed(t) if std::ptr::eq(t, &w)));

@@ -323,19 +323,21 @@ fn is_regeneration(text: &str) -> bool {
     text.starts_with("regenerating ") && text.ends_with("passes)")
 }
 
+impl Recorder {
+    /// How many mesh regenerations it was told of.
+    fn regenerations(&self) -> usize {
+        let messages = self.messages.lock().unwrap();
+        messages.iter().filter(|t| is_regeneration(t)).count()
+    }
+}
+
 #[test]
 fn a_run_stopped_while_regenerating_keeps_the_meshes_it_had_moved_on() {
     let config = tiny_config();
     let reference = tempfile::tempdir().unwrap();
     let all = Recorder::default();
     let want = train(&config, reference.path(), false, &all).unwrap();
-    let regenerated = all
-        .messages
-        .lock()
-        .unwrap()
-        .iter()
-        .filter(|t| is_regeneration(t))
-        .count();
+    let regenerated = all.regenerations();
     // three meshes (two sources, one validation) moved on after each of
     // networks 1..5
     assert_eq!(regenerated, 3 * 5);
@@ -359,13 +361,7 @@ fn a_run_stopped_while_regenerating_keeps_the_meshes_it_had_moved_on() {
     // bundle is the uninterrupted run's
     let resumed = Recorder::default();
     let got = train(&config, stopped.path(), true, &resumed).unwrap();
-    let again = resumed
-        .messages
-        .lock()
-        .unwrap()
-        .iter()
-        .filter(|t| is_regeneration(t))
-        .count();
+    let again = resumed.regenerations();
     assert_eq!(again, regenerated - 1);
     let without_clock = |m: &normalnet_net::bundle::Manifest| {
         let mut n = m.networks.clone();
@@ -386,12 +382,6 @@ fn a_run_stopped_while_regenerating_keeps_the_meshes_it_had_moved_on() {
     // a new run in the same folder takes nothing back
     let fresh = Recorder::default();
     train(&config, stopped.path(), false, &fresh).unwrap();
-    let anew = fresh
-        .messages
-        .lock()
-        .unwrap()
-        .iter()
-        .filter(|t| is_regeneration(t))
-        .count();
+    let anew = fresh.regenerations();
     assert_eq!(anew, regenerated);
 }
