@@ -344,18 +344,30 @@ fn a_run_stopped_while_regenerating_keeps_the_meshes_it_had_moved_on() {
 
     // stopped at the second mesh after network 1: the first one's state is saved
     let stopped = tempfile::tempdir().unwrap();
-    let stop = Recorder {
+    let stop_again = || Recorder {
         stop_at: Some(2),
         ..Recorder::default()
     };
     let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        train(&config, stopped.path(), false, &stop)
+        train(&config, stopped.path(), false, &stop_again())
     }));
     assert!(run.is_err(), "the run went on past the stop");
     let states = stopped.path().join("states");
     assert!(states.join("stage1_0.obj").is_file());
     assert!(!states.join("stage1_1.obj").is_file());
     assert!(stopped.path().join("state.toml").is_file());
+
+    // the same stop in a second folder, whose saved states claim another
+    // network: resumed, it takes none back
+    let other = tempfile::tempdir().unwrap();
+    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&config, other.path(), false, &stop_again())
+    }));
+    assert!(run.is_err());
+    std::fs::write(other.path().join("states/stage1.network"), "another").unwrap();
+    let distrusted = Recorder::default();
+    train(&config, other.path(), true, &distrusted).unwrap();
+    assert_eq!(distrusted.regenerations(), regenerated);
 
     // resumed: the saved mesh is taken back, not regenerated, and the
     // bundle is the uninterrupted run's

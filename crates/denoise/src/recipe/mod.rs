@@ -242,7 +242,8 @@ pub struct FitStage {
     pub rows: Vec<String>,
     /// a bundle folder (relative to the recipe's folder) whose table (with
     /// `late`, its late table) the stage takes instead of fitting one (no
-    /// `rows`): the path a refit's rows follow, or a table it keeps
+    /// `rows`): the path a refit's rows follow, or a table it keeps; a
+    /// main table comes without the bundle's late and heavy tables
     #[serde(default)]
     pub bundle: String,
     /// hidden units
@@ -763,6 +764,11 @@ impl Recipe {
     fn check_taken_table(&self, i: usize, s: &FitStage) -> Result<(), DenoiseError> {
         let bad = |message: String| self.stage_error(&s.name, message);
         self.check_table_kind(i, s)?;
+        if s.heavy_from.is_some() {
+            return Err(bad(
+                "a heavy table is fitted on `rows`; a bundle's is not taken".into(),
+            ));
+        }
         if !s.rows.is_empty() {
             return Err(bad(
                 "a stage takes its table from `bundle` or fits it on `rows`, not both".into(),

@@ -399,6 +399,13 @@ pub(super) fn switch_upto(
             _ => {}
         }
     }
+    // (a heavy table of another clamp than the main one's is refused here,
+    // before any rows follow it or a bundle carries it)
+    if let Some(m) = &main {
+        m.validate().map_err(|e| {
+            recipe_error(&recipe.file, format!("the switch up to stage {upto}: {e}"))
+        })?;
+    }
     Ok(main)
 }
 

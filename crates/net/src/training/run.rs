@@ -155,27 +155,28 @@ impl<'a> Run<'a> {
         std::fs::create_dir_all(out.join("checkpoint")).map_err(|e| NetError::io(out, e))?;
         let states = out.join("states");
         std::fs::create_dir_all(&states).map_err(|e| NetError::io(out, e))?;
+        let fresh = !(resume && out.join("state.toml").is_file());
         let state = RunState::read_or_new(out, resume)?;
-        if !resume || !out.join("state.toml").is_file() {
-            // a new run: no state of an earlier run is taken back, and a
-            // stop from here on resumes (the recipe resumes a stage whose
-            // folder has state.toml)
-            remove_states(&states)?;
-            state.save(out)?;
-        }
+        let model = ModelConfig::preset(&config.preset)?;
+        let init = init_bundle(config)?;
+        let pairs = make_pairs(config, &config.sources, config.seed, progress)?;
+        let val_pairs = make_pairs(config, &config.validation, config.seed + 777, progress)?;
         write_atomically(
             &out.join("config.toml"),
             toml::to_string_pretty(config)
                 .unwrap_or_default()
                 .as_bytes(),
         )?;
-        let model = ModelConfig::preset(&config.preset)?;
-        let init = init_bundle(config)?;
-        let pairs = make_pairs(config, &config.sources, config.seed, progress)?;
-        let val_pairs = make_pairs(config, &config.validation, config.seed + 777, progress)?;
         let log_path = out.join("train_log.csv");
-        if !log_path.is_file() || !resume {
+        if fresh || !log_path.is_file() {
             write_atomically(&log_path, b"network,step,lr,loss,val_deg,seconds\n")?;
+        }
+        if fresh {
+            // a new run: no state of an earlier run is taken back, and a
+            // stop from here on resumes (the recipe resumes a stage whose
+            // folder has state.toml)
+            remove_states(&states)?;
+            state.save(out)?;
         }
         Ok(Run {
             config,
@@ -502,6 +503,21 @@ impl<'a> Run<'a> {
         self.progress
             .message(&format!("regenerating meshes with network {}", k + 1));
         let states = self.out.join("states");
+        // the states saved for stage k + 1 are taken back only if this very
+        // network made them (a resumed run may retrain network k, and stop
+        // at another step, before it moves the meshes on)
+        let marker = states.join(format!("stage{}.network", k + 1));
+        let made_by = format!(
+            "{:016x}",
+            fnv1a(
+                &std::fs::read(self.network_path(k))
+                    .map_err(|e| NetError::io(self.network_path(k), e))?
+            )
+        );
+        if std::fs::read_to_string(&marker).ok().as_deref() != Some(made_by.as_str()) {
+            remove_states_of(&states, k + 1)?;
+            write_atomically(&marker, made_by.as_bytes())?;
+        }
         for (i, p) in self.pairs.iter_mut().chain(&mut self.val_pairs).enumerate() {
             let file = states.join(format!("stage{}_{i}.obj", k + 1));
             if let Some(saved) = saved_state(&file, &p.state)? {
@@ -733,14 +749,41 @@ fn saved_state(file: &Path, state: &Mesh) -> Result<Option<Mesh>, NetError> {
     Ok(same.then_some(saved))
 }
 
-/// Removes the mesh states (`*.obj`) of an earlier run from `states`.
+/// Removes the mesh states (`*.obj`) and their markers of an earlier run
+/// from `states`.
 fn remove_states(states: &Path) -> Result<(), NetError> {
-    let entries = std::fs::read_dir(states).map_err(|e| NetError::io(states, e))?;
+    remove_files(states, |name| {
+        name.ends_with(".obj") || name.ends_with(".network")
+    })
+}
+
+/// Removes the mesh states of stage `stage` (`stageK_I.obj`) from `states`.
+fn remove_states_of(states: &Path, stage: usize) -> Result<(), NetError> {
+    let prefix = format!("stage{stage}_");
+    remove_files(states, |name| {
+        name.starts_with(&prefix) && name.ends_with(".obj")
+    })
+}
+
+/// Removes the files of `folder` whose names `chosen` picks.
+fn remove_files(folder: &Path, chosen: impl Fn(&str) -> bool) -> Result<(), NetError> {
+    let entries = std::fs::read_dir(folder).map_err(|e| NetError::io(folder, e))?;
     for entry in entries {
-        let path = entry.map_err(|e| NetError::io(states, e))?.path();
-        if path.extension().is_some_and(|e| e == "obj") {
+        let path = entry.map_err(|e| NetError::io(folder, e))?.path();
+        if path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(&chosen)
+        {
             std::fs::remove_file(&path).map_err(|e| NetError::io(&path, e))?;
         }
     }
     Ok(())
+}
+
+/// FNV-1a 64 of `bytes`: which network file made a stage's states.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
