@@ -135,9 +135,13 @@ fn a_run_stopped_between_networks_resumes() {
     assert!(!dir.path().join("manifest.toml").exists());
     let net1 = std::fs::read(dir.path().join("net1.safetensors")).unwrap();
     config.stop_after = 6;
+    assert!(!dir.path().join("states/stage2_0.obj").exists());
     let manifest = train(&config, dir.path(), true, &NoProgress).unwrap();
     assert_eq!(manifest.networks.len(), 6);
     assert_eq!(manifest.networks[0].steps, 2);
+    // the meshes moved on through network 2 before network 3 trained on
+    // them (the run that stopped after it had not)
+    assert!(dir.path().join("states/stage2_0.obj").is_file());
     // finished networks are kept as they were
     assert_eq!(
         std::fs::read(dir.path().join("net1.safetensors")).unwrap(),

@@ -214,16 +214,32 @@ impl<'a> Run<'a> {
             self.load(&self.network_path(k))?;
         }
         let stage = self.state.finished;
-        if stage == 0 {
+        // (no network left to train: the last one moves no meshes on)
+        if stage == 0 || stage >= self.networks_to_train() {
             return Ok(());
         }
+        // the latest stage whose states are all saved (0: the noisy inputs),
+        // then on through the finished networks after it (a run that ended
+        // at `stop_after` did not move the meshes on past its last network)
         let states = self.out.join("states");
-        for (i, p) in self.pairs.iter_mut().chain(&mut self.val_pairs).enumerate() {
-            if let Some(saved) =
-                saved_state(&states.join(format!("stage{stage}_{i}.obj")), &p.state)?
-            {
-                p.state = saved;
+        let count = self.pairs.len() + self.val_pairs.len();
+        let saved =
+            |s: usize| (0..count).all(|i| states.join(format!("stage{s}_{i}.obj")).is_file());
+        let from = (1..=stage).rev().find(|&s| saved(s)).unwrap_or(0);
+        if from > 0 {
+            for (i, p) in self.pairs.iter_mut().chain(&mut self.val_pairs).enumerate() {
+                let file = states.join(format!("stage{from}_{i}.obj"));
+                p.state = saved_state(&file, &p.state)?.ok_or_else(|| NetError::BadConfig {
+                    path: file.clone(),
+                    message:
+                        "a saved mesh state of another mesh: the run cannot resume (start it anew)"
+                            .into(),
+                })?;
             }
+        }
+        for k in from..stage {
+            let net = self.load(&self.network_path(k))?;
+            self.advance_meshes(&net, k)?;
         }
         Ok(())
     }
