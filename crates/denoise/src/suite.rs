@@ -274,7 +274,7 @@ impl Suite {
             Some(f) => {
                 let bytes =
                     std::fs::read(f).map_err(|e| fail(&format!("reading {}", f.display()), &e))?;
-                Some(format!("{:016x}", fnv1a(&bytes)))
+                Some(format!("{:016x}", normalnet_net::bundle::fnv1a(&bytes)))
             }
             None => None,
         };
@@ -391,12 +391,6 @@ fn suite_error(path: &Path, message: String) -> DenoiseError {
         path: path.to_path_buf(),
         message,
     }
-}
-
-pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf29ce484222325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x100000001b3)
-    })
 }
 
 #[cfg(test)]

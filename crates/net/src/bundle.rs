@@ -533,6 +533,15 @@ pub fn code_version() -> String {
     }
 }
 
+/// FNV-1a 64 of `bytes`: the content hashes a bundle and its recipe run
+/// record (recipes, suites, source files, the network that made a
+/// training stage's mesh states).
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -227,6 +227,13 @@ impl SwitchWeights {
         }
     }
 
+    /// The table of a run from the feature rows of its first iteration
+    /// ([`SwitchWeights::for_run`] at their noise level; 0 for a mesh
+    /// without faces).
+    pub fn for_run_features(&self, first: &[[f64; NUM_FEATURES]]) -> Cow<'_, SwitchWeights> {
+        self.for_run(first.first().map_or(0.0, |x| x[NOISE_LEVEL_FEATURE]))
+    }
+
     /// The softmax weights of the candidates for one face's features (the
     /// late table's after `max_iteration` when there is one).
     pub fn probabilities(&self, x: &[f64; NUM_FEATURES]) -> [f64; NUM_CANDIDATES] {

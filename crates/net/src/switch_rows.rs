@@ -23,8 +23,7 @@ use crate::NetError;
 use crate::bundle::{Bundle, network_for_iteration};
 use crate::pipeline::{filtered_normals, take_flat_means};
 use crate::switch::{
-    self, ITERATION_FEATURE, NOISE_LEVEL_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchState,
-    SwitchWeights,
+    self, ITERATION_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchState, SwitchWeights,
 };
 use crate::switch_fit::ROW_LEN;
 
@@ -191,9 +190,7 @@ pub fn trace(
                 })
                 .collect(),
             TracePath::Learned(main) => {
-                let w = &**run_table.get_or_insert_with(|| {
-                    main.for_run(features.first().map_or(0.0, |x| x[NOISE_LEVEL_FEATURE]))
-                });
+                let w = &**run_table.get_or_insert_with(|| main.for_run_features(&features));
                 for (f, x) in features.iter().enumerate() {
                     let best = if w.network_on_folds && c.folded[f] {
                         switch::NETWORK

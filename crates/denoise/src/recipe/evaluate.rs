@@ -73,7 +73,7 @@ pub(super) fn evaluate(
         std::fs::read(&suite_file).map_err(|e| recipe_error(&suite_file, e.to_string()))?;
     let evaluation = Evaluation {
         suite: stage.suite.clone(),
-        suite_hash: format!("{:016x}", crate::suite::fnv1a(&suite_bytes)),
+        suite_hash: format!("{:016x}", normalnet_net::bundle::fnv1a(&suite_bytes)),
         settings: format!(
             "normalnet with {} (normalnet bench's settings)",
             serde_json::Value::Object(settings)

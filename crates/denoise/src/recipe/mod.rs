@@ -462,7 +462,7 @@ impl Recipe {
         for f in &files {
             append_file(&mut bytes, f)?;
         }
-        Ok(format!("{:016x}", crate::suite::fnv1a(&bytes)))
+        Ok(format!("{:016x}", normalnet_net::bundle::fnv1a(&bytes)))
     }
 
     /// Per stage, FNV-1a 64 (hex) of the previous stage's hash, the
@@ -491,7 +491,7 @@ impl Recipe {
             for f in self.stage_files(stage) {
                 append_file(&mut bytes, &f)?;
             }
-            previous = format!("{:016x}", crate::suite::fnv1a(&bytes));
+            previous = format!("{:016x}", normalnet_net::bundle::fnv1a(&bytes));
             hashes.push(previous.clone());
         }
         Ok(hashes)

@@ -7,7 +7,7 @@ use normalnet_mesh::{Mesh, Topology};
 
 use super::params::{Form, GuidedLimit};
 use super::skips::Selection;
-use crate::switch::{self, NOISE_LEVEL_FEATURE, SwitchState, SwitchWeights};
+use crate::switch::{self, SwitchState, SwitchWeights};
 use std::borrow::Cow;
 
 /// A [`Form`] with what it carries from one iteration to the next (the
@@ -70,10 +70,9 @@ impl<'a> Chooser<'a> {
                 let state = self.switch_state.as_mut().expect("made with the switch");
                 let candidates = state.candidates(current, topology, normals);
                 let features = switch::features(topology, &candidates, k);
-                let table = self.run_table.get_or_insert_with(|| {
-                    let noise_level = features.first().map_or(0.0, |x| x[NOISE_LEVEL_FEATURE]);
-                    weights.for_run(noise_level)
-                });
+                let table = self
+                    .run_table
+                    .get_or_insert_with(|| weights.for_run_features(&features));
                 let (blended, stays) = switch::blend_with_stays(table, &candidates, &features);
                 let counted = |f: usize| !selection.is_reused(f);
                 let n = blended.len();

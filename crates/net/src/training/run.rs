@@ -20,7 +20,7 @@ use super::{REGEN_MU_G, REGEN_VERTEX_ITERATIONS, TrainConfig};
 use crate::NetError;
 use crate::arch::ModelConfig;
 use crate::bundle::{
-    INTERVALS, MANIFEST, Manifest, NetworkInfo, TrainingInfo, network_file, new_manifest,
+    INTERVALS, MANIFEST, Manifest, NetworkInfo, TrainingInfo, fnv1a, network_file, new_manifest,
     write_atomically,
 };
 use crate::data::SampleBatch;
@@ -223,12 +223,11 @@ impl<'a> Run<'a> {
         // at `stop_after` did not move the meshes on past its last network)
         let states = self.out.join("states");
         let count = self.pairs.len() + self.val_pairs.len();
-        let saved =
-            |s: usize| (0..count).all(|i| states.join(format!("stage{s}_{i}.obj")).is_file());
+        let saved = |s: usize| (0..count).all(|i| state_file(&states, s, i).is_file());
         let from = (1..=stage).rev().find(|&s| saved(s)).unwrap_or(0);
         if from > 0 {
             for (i, p) in self.pairs.iter_mut().chain(&mut self.val_pairs).enumerate() {
-                let file = states.join(format!("stage{from}_{i}.obj"));
+                let file = state_file(&states, from, i);
                 p.state = saved_state(&file, &p.state)?.ok_or_else(|| NetError::BadConfig {
                     path: file.clone(),
                     message:
@@ -523,19 +522,15 @@ impl<'a> Run<'a> {
         // network made them (a resumed run may retrain network k, and stop
         // at another step, before it moves the meshes on)
         let marker = states.join(format!("stage{}.network", k + 1));
-        let made_by = format!(
-            "{:016x}",
-            fnv1a(
-                &std::fs::read(self.network_path(k))
-                    .map_err(|e| NetError::io(self.network_path(k), e))?
-            )
-        );
+        let network = self.network_path(k);
+        let bytes = std::fs::read(&network).map_err(|e| NetError::io(&network, e))?;
+        let made_by = format!("{:016x}", fnv1a(&bytes));
         if std::fs::read_to_string(&marker).ok().as_deref() != Some(made_by.as_str()) {
             remove_states_of(&states, k + 1)?;
             write_atomically(&marker, made_by.as_bytes())?;
         }
         for (i, p) in self.pairs.iter_mut().chain(&mut self.val_pairs).enumerate() {
-            let file = states.join(format!("stage{}_{i}.obj", k + 1));
+            let file = state_file(&states, k + 1, i);
             if let Some(saved) = saved_state(&file, &p.state)? {
                 p.state = saved;
                 continue;
@@ -797,9 +792,8 @@ fn remove_files(folder: &Path, chosen: impl Fn(&str) -> bool) -> Result<(), NetE
     Ok(())
 }
 
-/// FNV-1a 64 of `bytes`: which network file made a stage's states.
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    })
+/// `states/stage{stage}_{i}.obj`: mesh `i`'s state as network `stage`
+/// (1-based) leaves it.
+fn state_file(states: &Path, stage: usize, i: usize) -> PathBuf {
+    states.join(format!("stage{stage}_{i}.obj"))
 }
