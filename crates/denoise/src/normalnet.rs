@@ -13,6 +13,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::DenoiseError;
+use crate::cnr::model::CnrModel;
+use crate::cnr::{load_model, run_cascade};
 use crate::params::{Params, defaults_of, resolve};
 use crate::registry::{Kind, Method, MethodInfo, Outcome};
 
@@ -52,6 +54,10 @@ pub struct NormalnetParams {
     /// the pipeline (iterations, μ_g, form, skips, stop rule, fold guard)
     #[serde(flatten)]
     pub pipeline: DenoiseParams,
+    /// stages of the built-in CNR model (cascaded normal regression, 20
+    /// vertex passes each) run on the input before NormalNet (0 = none, the
+    /// paper's form; an experiment of issue 34)
+    pub cnr_before: usize,
     /// GNF normal passes (reference settings but μ_g = `mu_g`, 10 vertex
     /// passes each) run on NormalNet's result (0 = none, the paper's form)
     pub gnf_after: usize,
@@ -104,6 +110,8 @@ struct NormalNet {
     /// the arithmetic the networks run on this CPU (what the parameters
     /// asked for where the kernel path and networks allow)
     arithmetic: Arithmetic,
+    /// the built-in CNR model where `cnr_before` asks for its stages
+    cnr: Option<CnrModel>,
 }
 
 fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseError> {
@@ -111,10 +119,15 @@ fn build(name: &'static str, given: &Params) -> Result<Box<dyn Method>, DenoiseE
     params.check()?;
     let mut bundle = params.load_bundle()?;
     let arithmetic = bundle.set_arithmetic(params.arithmetic);
+    let cnr = match params.cnr_before {
+        0 => None,
+        _ => Some(load_model(None)?.0),
+    };
     Ok(Box::new(NormalNet {
         params,
         bundle,
         arithmetic,
+        cnr,
     }))
 }
 
@@ -146,6 +159,15 @@ impl Method for NormalNet {
         let params = &self.params.pipeline;
         let mut stages = None;
         let mesh = denoise_around(mesh, |m| {
+            let before;
+            let m = match &self.cnr {
+                Some(model) => {
+                    let guard = params.fold_guard.then_some(params.fold_guard_cos);
+                    before = run_cascade(model, m, self.params.cnr_before, 20, guard, progress);
+                    &before
+                }
+                None => m,
+            };
             let (out, times) = normalnet_net::denoise(m, &self.bundle, params, progress)?;
             stages = Some(times);
             if self.params.gnf_after == 0 {

@@ -92,6 +92,29 @@ fn gnf_after_is_gnf_run_on_normalnets_result() {
     assert_eq!(hybrid.positions, expected.positions);
 }
 
+#[test]
+fn cnr_before_is_normalnet_run_on_cnrs_result() {
+    let (_, noisy) = shape();
+    let mut p = Params::new();
+    p.insert("iterations".into(), 2.into());
+    let run = |method: &str, p: &Params, mesh| {
+        Denoiser::new(method, p)
+            .unwrap()
+            .with_fold_repair(false)
+            .denoise(mesh, None, &NoProgress)
+            .unwrap()
+    };
+    let plain = run("normalnet", &p, &noisy);
+    let mut c = Params::new();
+    c.insert("stages".into(), 2.into());
+    let cnr = run("cnr", &c, &noisy);
+    let expected = run("normalnet", &p, &cnr);
+    p.insert("cnr_before".into(), 2.into());
+    let hybrid = run("normalnet", &p, &noisy);
+    assert_ne!(hybrid.positions, plain.positions);
+    assert_eq!(hybrid.positions, expected.positions);
+}
+
 /// int8 residual blocks (the default where the CPU has AVX2 or AVX-512 VNNI) give
 /// nearly the f32 result, and `parameters` says which arithmetic ran.
 #[test]
