@@ -152,6 +152,12 @@ fn issue_35_a_killed_recipe_run_resumes_to_the_bundle_of_an_uninterrupted_one() 
     ] {
         assert!(manifest.contains(key), "{key} missing:\n{manifest}");
     }
+    // the heavy table has the CNR candidate (five output biases), the main
+    // table not (four)
+    let parsed: toml::Value = toml::from_str(&manifest).unwrap();
+    let biases = |t: &toml::Value| t["b2"].as_array().unwrap().len();
+    assert_eq!(biases(&parsed["switch"]), 4);
+    assert_eq!(biases(&parsed["switch"]["heavy"]["table"]), 5);
 
     // the bundle loads and denoises
     let clean = normalnet_voxel::shapes::generate_seeded(5, 300).unwrap();

@@ -15,6 +15,7 @@
 
 pub mod bi;
 pub mod bilateral;
+pub mod cnr;
 pub mod driver;
 pub mod error;
 pub mod fold_repair;

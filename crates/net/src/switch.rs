@@ -6,6 +6,9 @@
 //!    oracle's pass with learned instead of ground-truth guidance),
 //! 2. one GNF pass over the current normals (GNF's own patch guidance),
 //! 3. the current normal (the face stays where it is),
+//! 4. CNR's normal (issue 34; only in tables that read it,
+//!    [`SwitchWeights::reads_cnr`]): the face normals of the built-in CNR
+//!    cascade (`normalnet_filters::cnr`) run once on the run's input,
 //!
 //! and a small perceptron ([`SwitchWeights`], a bundle's `[switch]` table)
 //! reads [`NUM_FEATURES`] rotation-invariant features of the face and its
@@ -22,7 +25,8 @@
 //! (the perceptron clamps it to its `max_iteration`); then three per-mesh
 //! values: the median of feature 6 (0-based; a noise level), the median of
 //! feature 4, and the fraction of faces whose feature 5 is below 10° (how
-//! much of the mesh is flat).
+//! much of the mesh is flat). Tables with the CNR candidate read two more:
+//! ∠(net, CNR) and ∠(CNR, current).
 //!
 //! A bundle's switch may carry a second, late table (`[switch.late]`,
 //! [`SwitchWeights::late`]) for the iterations after the main table's
@@ -32,10 +36,12 @@
 //! a whole run when its input's noise level (feature 9 of the first
 //! iteration) is high ([`SwitchWeights::for_run`]).
 
+use normalnet_filters::cnr::{builtin, run_cascade};
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_pass};
-use normalnet_filters::{FoldCheck, Gnf, GnfParams, NormalFilter};
+use normalnet_filters::{FOLD_GUARD_COS, FoldCheck, Gnf, GnfParams, NormalFilter};
+use normalnet_mesh::geometry::face_normals;
 use normalnet_mesh::vec3::{self, Vec3};
-use normalnet_mesh::{FaceGeometry, Mesh, Topology};
+use normalnet_mesh::{FaceGeometry, Mesh, NoProgress, Topology};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -62,22 +68,34 @@ pub fn feature_as_read(j: usize, x: f64, max_iteration: usize) -> f64 {
     }
 }
 
-/// Features per face.
-pub const NUM_FEATURES: usize = 12;
+/// Features per face (a row): the [`BASE_FEATURES`], then ∠(net, CNR) and
+/// ∠(CNR, current) (0 in runs without the CNR candidate).
+pub const NUM_FEATURES: usize = 14;
+
+/// The features a table without the CNR candidate reads: the first ones.
+pub const BASE_FEATURES: usize = 12;
 
 /// The noise level's place in a feature row: the median over the mesh of
 /// each face's mean angle to its 1-ring (feature 6), the same in every row.
 pub const NOISE_LEVEL_FEATURE: usize = 9;
 
 /// The candidates, in the switch's output order.
-pub const CANDIDATES: [&str; 4] = ["network", "guided", "gnf", "current"];
+pub const CANDIDATES: [&str; 5] = ["network", "guided", "gnf", "current", "cnr"];
 
 /// Number of candidates.
 pub const NUM_CANDIDATES: usize = CANDIDATES.len();
 
+/// The candidates of a table without the CNR candidate: the first ones.
+pub const BASE_CANDIDATES: usize = 4;
+
+/// Index of the CNR candidate.
+pub const CNR: usize = 4;
+
 /// A perceptron with one tanh hidden layer: `softmax(W2·tanh(W1·z + b1) + b2)`
 /// with `z = (x − mean) / std`. Row-major: `w1` is hidden × features, `w2`
-/// candidates × hidden.
+/// candidates × hidden. A table has the [`BASE_CANDIDATES`] and reads the
+/// [`BASE_FEATURES`], or has all [`NUM_CANDIDATES`] (CNR's too) and reads
+/// all [`NUM_FEATURES`]; the lengths of `b2` and `mean` say which.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SwitchWeights {
     /// hidden units
@@ -151,13 +169,19 @@ impl SwitchWeights {
     /// large negative values).
     pub fn validate(&self) -> Result<(), String> {
         let h = self.hidden;
+        if self.b2.len() != BASE_CANDIDATES && self.b2.len() != NUM_CANDIDATES {
+            return Err(format!(
+                "switch: b2 has {} values, expected {BASE_CANDIDATES} (or {NUM_CANDIDATES} with the CNR candidate)",
+                self.b2.len()
+            ));
+        }
+        let (nf, nc) = (self.num_features(), self.num_candidates());
         let shapes = [
-            ("mean", self.mean.len(), NUM_FEATURES),
-            ("std", self.std.len(), NUM_FEATURES),
-            ("w1", self.w1.len(), h * NUM_FEATURES),
+            ("mean", self.mean.len(), nf),
+            ("std", self.std.len(), nf),
+            ("w1", self.w1.len(), h * nf),
             ("b1", self.b1.len(), h),
-            ("w2", self.w2.len(), NUM_CANDIDATES * h),
-            ("b2", self.b2.len(), NUM_CANDIDATES),
+            ("w2", self.w2.len(), nc * h),
         ];
         if h == 0 {
             return Err("switch: hidden = 0".into());
@@ -211,6 +235,37 @@ impl SwitchWeights {
         }
     }
 
+    /// Whether this table has the CNR candidate (and reads its features).
+    pub fn reads_cnr(&self) -> bool {
+        self.b2.len() == NUM_CANDIDATES
+    }
+
+    /// Whether a run with this switch needs CNR's normals: a table of it
+    /// (this one, its late or heavy table) has the CNR candidate.
+    pub fn needs_cnr(&self) -> bool {
+        self.reads_cnr()
+            || self.late.as_ref().is_some_and(|t| t.reads_cnr())
+            || self.heavy.as_ref().is_some_and(|t| t.table.reads_cnr())
+    }
+
+    /// The candidates of this table.
+    pub fn num_candidates(&self) -> usize {
+        if self.reads_cnr() {
+            NUM_CANDIDATES
+        } else {
+            BASE_CANDIDATES
+        }
+    }
+
+    /// The features this table reads (the first ones of a row).
+    pub fn num_features(&self) -> usize {
+        if self.reads_cnr() {
+            NUM_FEATURES
+        } else {
+            BASE_FEATURES
+        }
+    }
+
     /// The table of a run whose first iteration has noise level
     /// `noise_level` ([`NOISE_LEVEL_FEATURE`]): this one, or from the heavy
     /// table's threshold on that table with this one's late table and fold
@@ -235,38 +290,47 @@ impl SwitchWeights {
     }
 
     /// The softmax weights of the candidates for one face's features (the
-    /// late table's after `max_iteration` when there is one).
+    /// late table's after `max_iteration` when there is one); 0 for the
+    /// candidates the table does not have.
     pub fn probabilities(&self, x: &[f64; NUM_FEATURES]) -> [f64; NUM_CANDIDATES] {
         if let Some(late) = &self.late
             && x[ITERATION_FEATURE] > self.max_iteration as f64
         {
             return late.probabilities(x);
         }
+        let (nf, nc) = (self.num_features(), self.num_candidates());
         let mut z = [0.0; NUM_FEATURES];
-        for (j, z) in z.iter_mut().enumerate() {
+        for (j, z) in z[..nf].iter_mut().enumerate() {
             *z = (feature_as_read(j, x[j], self.max_iteration) - self.mean[j]) / self.std[j];
         }
         let hidden: Vec<f64> = self
             .w1
-            .chunks_exact(NUM_FEATURES)
+            .chunks_exact(nf)
             .zip(&self.b1)
-            .map(|(w, b)| (dot(w, &z) + b).tanh())
+            .map(|(w, b)| (dot(w, &z[..nf]) + b).tanh())
             .collect();
         let mut logits = [0.0; NUM_CANDIDATES];
-        for ((l, w), b) in logits
+        for ((l, w), b) in logits[..nc]
             .iter_mut()
             .zip(self.w2.chunks_exact(self.hidden))
             .zip(&self.b2)
         {
             *l = dot(w, &hidden) + b;
         }
-        let max = logits.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let max = logits[..nc]
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
         let mut sum = 0.0;
-        for l in &mut logits {
+        for l in &mut logits[..nc] {
             *l = (*l - max).exp();
             sum += *l;
         }
-        logits.map(|e| e / sum)
+        let mut p = [0.0; NUM_CANDIDATES];
+        for (p, e) in p.iter_mut().zip(&logits[..nc]) {
+            *p = e / sum;
+        }
+        p
     }
 }
 
@@ -274,9 +338,9 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(a, b)| a * b).sum()
 }
 
-/// The four candidates of one iteration, one normal per face each.
+/// The candidates of one iteration, one normal per face each.
 pub struct Candidates {
-    /// in [`CANDIDATES`] order
+    /// in [`CANDIDATES`] order; CNR's empty in runs without it
     pub normals: [Vec<Vec3>; NUM_CANDIDATES],
     /// per face: folded in the current mesh (the fold test of
     /// `normalnet_filters::fold_repair` with the current mesh as its own
@@ -287,22 +351,45 @@ pub struct Candidates {
 }
 
 /// What the switch needs across iterations: GNF's neighbourhood, built once
-/// on the input mesh (as GNF does).
+/// on the input mesh (as GNF does), and CNR's normals where a table reads
+/// them.
 pub struct SwitchState {
     gnf: Gnf,
     mu_g: f64,
+    cnr: Vec<Vec3>,
+}
+
+/// Vertex passes after each CNR stage (CNR's default).
+const CNR_VERTEX_ITERATIONS: usize = 20;
+
+/// The face normals of the built-in CNR cascade (every stage, 20 vertex
+/// passes each, the fold guard) run on `mesh`.
+pub fn cnr_normals(mesh: &Mesh) -> Vec<Vec3> {
+    // the built-in model is the library's own file: it parses (a test says so)
+    let model = builtin().expect("the built-in CNR model parses");
+    let out = run_cascade(
+        &model,
+        mesh,
+        0,
+        CNR_VERTEX_ITERATIONS,
+        Some(FOLD_GUARD_COS),
+        &NoProgress,
+    );
+    face_normals(&out)
 }
 
 impl SwitchState {
-    /// Prepares the GNF pass for `mesh` (the input of the run).
-    pub fn new(mesh: &Mesh, topology: &Topology, mu_g: f64) -> SwitchState {
+    /// Prepares the GNF pass for `mesh` (the input of the run), and CNR's
+    /// normals with `cnr`.
+    pub fn new(mesh: &Mesh, topology: &Topology, mu_g: f64, cnr: bool) -> SwitchState {
         let params = GnfParams {
             mu_g,
             ..GnfParams::default()
         };
         // the only error is a parameter out of range; μ_g was validated
         let gnf = Gnf::new(&params, mesh, topology).expect("GNF parameters validated");
-        SwitchState { gnf, mu_g }
+        let cnr = if cnr { cnr_normals(mesh) } else { Vec::new() };
+        SwitchState { gnf, mu_g, cnr }
     }
 
     /// The candidates for the current mesh given the network's outputs.
@@ -320,7 +407,7 @@ impl SwitchState {
         let folded =
             FoldCheck::new(&current.positions, &current.faces, topology).folded(&current.positions);
         Candidates {
-            normals: [net, guided, gnf, geometry.normals],
+            normals: [net, guided, gnf, geometry.normals, self.cnr.clone()],
             folded,
         }
     }
@@ -352,7 +439,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// The features of every face (see the module docs) in iteration `k`.
 pub fn features(topology: &Topology, c: &Candidates, k: usize) -> Vec<[f64; NUM_FEATURES]> {
-    let [net, guided, gnf, current] = &c.normals;
+    let [net, guided, gnf, current, cnr] = &c.normals;
     let mut rows: Vec<[f64; NUM_FEATURES]> = (0..net.len())
         .into_par_iter()
         .with_min_len(256)
@@ -360,6 +447,10 @@ pub fn features(topology: &Topology, c: &Candidates, k: usize) -> Vec<[f64; NUM_
             let (net_mean, net_max) = ring_angles(topology, net, f);
             let (current_mean, _) = ring_angles(topology, current, f);
             let (_, gnf_max) = ring_angles(topology, gnf, f);
+            let (net_cnr, cnr_current) = match cnr.get(f) {
+                Some(&n) => (vec3::angle(net[f], n), vec3::angle(n, current[f])),
+                None => (0.0, 0.0),
+            };
             [
                 vec3::angle(net[f], guided[f]),
                 vec3::angle(net[f], gnf[f]),
@@ -373,6 +464,8 @@ pub fn features(topology: &Topology, c: &Candidates, k: usize) -> Vec<[f64; NUM_
                 0.0,
                 0.0,
                 0.0,
+                net_cnr,
+                cnr_current,
             ]
         })
         .collect();
@@ -432,7 +525,8 @@ pub fn blend_with_stays(
             }
             let p = weights.probabilities(x);
             let mut sum = [0.0; 3];
-            for (candidate, w) in c.normals.iter().zip(p) {
+            // a run without CNR's normals has no CNR candidate
+            for (candidate, w) in c.normals.iter().zip(p).filter(|(c, _)| !c.is_empty()) {
                 sum = vec3::add(sum, vec3::scale(candidate[f], w));
             }
             let n = vec3::normalize_or_zero(sum);
@@ -447,17 +541,23 @@ pub fn blend_with_stays(
 pub(crate) mod tests {
     use super::*;
 
-    /// A switch that always picks candidate `c` (a constant perceptron).
+    /// A switch that always picks candidate `c` (a constant perceptron),
+    /// with the CNR candidate only where `c` is it.
     pub(crate) fn constant(c: usize) -> SwitchWeights {
-        let mut b2 = vec![-1e9; NUM_CANDIDATES];
+        let (nf, nc) = if c == CNR {
+            (NUM_FEATURES, NUM_CANDIDATES)
+        } else {
+            (BASE_FEATURES, BASE_CANDIDATES)
+        };
+        let mut b2 = vec![-1e9; nc];
         b2[c] = 0.0;
         SwitchWeights {
             hidden: 2,
-            mean: vec![0.0; NUM_FEATURES],
-            std: vec![1.0; NUM_FEATURES],
-            w1: vec![0.1; 2 * NUM_FEATURES],
+            mean: vec![0.0; nf],
+            std: vec![1.0; nf],
+            w1: vec![0.1; 2 * nf],
             b1: vec![0.0; 2],
-            w2: vec![0.0; 2 * NUM_CANDIDATES],
+            w2: vec![0.0; 2 * nc],
             b2,
             max_iteration: DEFAULT_MAX_ITERATION,
             notes: String::new(),
@@ -473,7 +573,7 @@ pub(crate) mod tests {
         w.b2 = vec![0.0, 1.0, 2.0, 3.0];
         w.w2[0] = 1.0; // candidate 0 reads hidden unit 0
         let x = [0.5; NUM_FEATURES];
-        let h0 = (0.1f64 * 0.5 * NUM_FEATURES as f64).tanh();
+        let h0 = (0.1f64 * 0.5 * BASE_FEATURES as f64).tanh();
         let logits = [h0, 1.0, 2.0, 3.0];
         let sum: f64 = logits.iter().map(|l| l.exp()).sum();
         let p = w.probabilities(&x);
@@ -486,9 +586,9 @@ pub(crate) mod tests {
     #[test]
     fn the_iteration_is_clamped_to_the_switch_s_longest_run() {
         let mut w = constant(0);
-        w.b2 = vec![0.0; NUM_CANDIDATES];
+        w.b2 = vec![0.0; BASE_CANDIDATES];
         w.w2[0] = 1.0; // candidate 0 reads hidden unit 0, which reads k
-        w.w1 = vec![0.0; 2 * NUM_FEATURES];
+        w.w1 = vec![0.0; 2 * BASE_FEATURES];
         w.w1[ITERATION_FEATURE] = 0.1;
         let at = |w: &SwitchWeights, k: f64| {
             let mut x = [0.0; NUM_FEATURES];
@@ -631,7 +731,7 @@ pub(crate) mod tests {
         let mesh = normalnet_voxel::shapes::generate_seeded(3, 300).unwrap();
         let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
         let current = normalnet_mesh::geometry::face_normals(&mesh);
-        let mut state = SwitchState::new(&mesh, &topology, 0.35);
+        let mut state = SwitchState::new(&mesh, &topology, 0.35, true);
         // the network "outputs" the current normals
         let c = state.candidates(&mesh, &topology, current.clone());
         assert_eq!(c.normals[3], current);
@@ -641,7 +741,8 @@ pub(crate) mod tests {
             assert!(r[3] < 1e-7, "∠(net, current) with net = current");
             assert_eq!(r[8], 4.0);
             assert!(r.iter().all(|v| v.is_finite() && *v >= 0.0));
-            assert_eq!(r[9..], x[0][9..], "per-mesh values are shared");
+            assert_eq!(r[9..12], x[0][9..12], "per-mesh values are shared");
+            assert!(r[12] > 0.0 || r[13] > 0.0 || c.normals[CNR].is_empty());
         }
         // noise makes fewer 1-rings flat and raises the noise level
         let l = normalnet_mesh::geometry::mean_edge_length(&mesh, &topology);
@@ -694,7 +795,7 @@ pub(crate) mod tests {
         let n = normalnet_mesh::geometry::face_normals(&mesh)[0];
         let l = normalnet_mesh::geometry::mean_edge_length(&mesh, &topology);
         folded.positions[v] = vec3::sub(folded.positions[v], vec3::scale(n, 3.0 * l));
-        let mut state = SwitchState::new(&folded, &topology, 0.35);
+        let mut state = SwitchState::new(&folded, &topology, 0.35, false);
         // a "network" that outputs +x everywhere: unlike every other candidate
         let net = vec![[1.0, 0.0, 0.0]; mesh.num_faces()];
         let c = state.candidates(&folded, &topology, net);

@@ -1,5 +1,5 @@
 //! Fitting the learned switch ([`crate::switch`]): from rows of face
-//! features and the four candidates' angles to the ground truth (collected
+//! features and the candidates' angles to the ground truth (collected
 //! by running the pipeline on training pairs, see
 //! `examples/switch_trace.rs`), a one-hidden-layer perceptron whose softmax
 //! minimises the expected angle `Σ_c p_c · e_c` (degrees), by Adam over
@@ -13,7 +13,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::switch::{
-    DEFAULT_MAX_ITERATION, NUM_CANDIDATES, NUM_FEATURES, SwitchWeights, feature_as_read,
+    BASE_CANDIDATES, BASE_FEATURES, DEFAULT_MAX_ITERATION, NUM_CANDIDATES, NUM_FEATURES,
+    SwitchWeights, feature_as_read,
 };
 
 /// One training row: features, then each candidate's angle to the ground
@@ -36,6 +37,9 @@ pub struct FitParams {
     /// the iteration feature is clamped to this (10; the longest runs
     /// among the rows)
     pub max_iteration: usize,
+    /// a table with the CNR candidate (reading all [`NUM_FEATURES`]); its
+    /// rows must have been traced with it
+    pub cnr: bool,
 }
 
 impl Default for FitParams {
@@ -47,23 +51,38 @@ impl Default for FitParams {
             learning_rate: 3e-3,
             seed: 1,
             max_iteration: DEFAULT_MAX_ITERATION,
+            cnr: false,
         }
     }
 }
 
-/// The parameters as one flat vector: w1, b1, w2, b2.
+impl FitParams {
+    /// The features and candidates of the table it fits.
+    fn dims(&self) -> (usize, usize) {
+        if self.cnr {
+            (NUM_FEATURES, NUM_CANDIDATES)
+        } else {
+            (BASE_FEATURES, BASE_CANDIDATES)
+        }
+    }
+}
+
+/// The parameters as one flat vector: w1, b1, w2, b2; `nf` features, `nc`
+/// candidates.
 struct Layout {
     h: usize,
+    nf: usize,
+    nc: usize,
 }
 
 impl Layout {
     fn len(&self) -> usize {
-        self.h * NUM_FEATURES + self.h + NUM_CANDIDATES * self.h + NUM_CANDIDATES
+        self.h * self.nf + self.h + self.nc * self.h + self.nc
     }
     fn split<'a>(&self, p: &'a [f64]) -> (&'a [f64], &'a [f64], &'a [f64], &'a [f64]) {
-        let (w1, rest) = p.split_at(self.h * NUM_FEATURES);
+        let (w1, rest) = p.split_at(self.h * self.nf);
         let (b1, rest) = rest.split_at(self.h);
-        let (w2, b2) = rest.split_at(NUM_CANDIDATES * self.h);
+        let (w2, b2) = rest.split_at(self.nc * self.h);
         (w1, b1, w2, b2)
     }
 }
@@ -71,14 +90,15 @@ impl Layout {
 /// Expected error (degrees) of one row and, when `grad` is given, its
 /// gradient added into `grad`.
 fn row_loss(layout: &Layout, p: &[f64], z: &[f64], e_deg: &[f64], grad: Option<&mut [f64]>) -> f64 {
-    let h = layout.h;
+    let (h, nf, nc) = (layout.h, layout.nf, layout.nc);
     let (w1, b1, w2, b2) = layout.split(p);
     let hidden: Vec<f64> = w1
-        .chunks_exact(NUM_FEATURES)
+        .chunks_exact(nf)
         .zip(b1)
         .map(|(w, b)| (w.iter().zip(z).map(|(a, b)| a * b).sum::<f64>() + b).tanh())
         .collect();
     let mut logits = [0.0; NUM_CANDIDATES];
+    let logits = &mut logits[..nc];
     for (c, l) in logits.iter_mut().enumerate() {
         *l = b2[c]
             + w2[c * h..(c + 1) * h]
@@ -88,16 +108,20 @@ fn row_loss(layout: &Layout, p: &[f64], z: &[f64], e_deg: &[f64], grad: Option<&
                 .sum::<f64>();
     }
     let max = logits.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let mut prob = logits.map(|l| (l - max).exp());
+    let mut prob = [0.0; NUM_CANDIDATES];
+    let prob = &mut prob[..nc];
+    for (q, l) in prob.iter_mut().zip(logits.iter()) {
+        *q = (l - max).exp();
+    }
     let sum: f64 = prob.iter().sum();
     prob.iter_mut().for_each(|q| *q /= sum);
     let loss: f64 = prob.iter().zip(e_deg).map(|(q, e)| q * e).sum();
     if let Some(g) = grad {
-        let (gw1, rest) = g.split_at_mut(h * NUM_FEATURES);
+        let (gw1, rest) = g.split_at_mut(h * nf);
         let (gb1, rest) = rest.split_at_mut(h);
-        let (gw2, gb2) = rest.split_at_mut(NUM_CANDIDATES * h);
+        let (gw2, gb2) = rest.split_at_mut(nc * h);
         let mut dhidden = vec![0.0; h];
-        for c in 0..NUM_CANDIDATES {
+        for c in 0..nc {
             let dl = prob[c] * (e_deg[c] - loss);
             gb2[c] += dl;
             for j in 0..h {
@@ -108,10 +132,7 @@ fn row_loss(layout: &Layout, p: &[f64], z: &[f64], e_deg: &[f64], grad: Option<&
         for j in 0..h {
             let da = dhidden[j] * (1.0 - hidden[j] * hidden[j]);
             gb1[j] += da;
-            for (g, x) in gw1[j * NUM_FEATURES..(j + 1) * NUM_FEATURES]
-                .iter_mut()
-                .zip(z)
-            {
+            for (g, x) in gw1[j * nf..(j + 1) * nf].iter_mut().zip(z) {
                 *g += da * x;
             }
         }
@@ -124,33 +145,37 @@ fn row_loss(layout: &Layout, p: &[f64], z: &[f64], e_deg: &[f64], grad: Option<&
 pub struct FitReport {
     /// mean expected error (degrees) after each epoch, on all rows
     pub epoch_loss: Vec<f64>,
-    /// mean angle (degrees) of each candidate alone, and of the best per row
-    pub candidate_mean_deg: [f64; NUM_CANDIDATES],
+    /// mean angle (degrees) of each candidate of the table alone
+    pub candidate_mean_deg: Vec<f64>,
     /// mean angle (degrees) of the per-row best candidate (the ceiling)
     pub best_mean_deg: f64,
 }
 
-/// Fits a switch to `rows` (each [`ROW_LEN`] values). `allowed` lists the
-/// candidates it may choose (the others get a bias of −10⁹).
+/// Fits a switch to `rows` (each [`ROW_LEN`] values; a table with the CNR
+/// candidate where `params.cnr`). `allowed` lists the candidates it may
+/// choose (the others get a bias of −10⁹).
 ///
 /// # Errors
-/// No rows, a row of the wrong length, non-finite values, or an empty
-/// `allowed`.
+/// No rows, a row of the wrong length, non-finite values the table reads
+/// (CNR's angle in rows traced without it), or an empty `allowed`.
 pub fn fit(
     rows: &[f32],
     allowed: &[usize],
     params: &FitParams,
 ) -> Result<(SwitchWeights, FitReport), String> {
     check_fit_inputs(rows, allowed, params)?;
-    let data = Standardized::new(rows, params.max_iteration);
-    let mask = candidate_mask(allowed);
-    let (candidate_mean_deg, best_mean_deg) = candidate_means(&data.e, allowed);
+    let (nf, nc) = params.dims();
+    let data = Standardized::new(rows, params.max_iteration, nf, nc);
+    let mask = candidate_mask(allowed, nc);
+    let (candidate_mean_deg, best_mean_deg) = candidate_means(&data.e, allowed, nc);
     let layout = Layout {
         h: params.hidden.max(1),
+        nf,
+        nc,
     };
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     let mut p = initial_parameters(&layout, &mask, &mut rng);
-    let b2_start = layout.len() - NUM_CANDIDATES;
+    let b2_start = layout.len() - nc;
     let mut adam = Adam::new(p.len());
     let mut order: Vec<usize> = (0..data.n).collect();
     let mut epoch_loss = Vec::with_capacity(params.epochs);
@@ -159,7 +184,7 @@ pub fn fit(
         for idx in order.chunks(params.batch.max(1)) {
             let mut g = batch_gradient(&layout, &p, &data, idx);
             // the masked biases stay where they are
-            for c in 0..NUM_CANDIDATES {
+            for c in 0..nc {
                 if mask[c] != 0.0 {
                     g[b2_start + c] = 0.0;
                 }
@@ -205,10 +230,24 @@ fn check_fit_inputs(rows: &[f32], allowed: &[usize], params: &FitParams) -> Resu
             rows.len()
         ));
     }
-    if rows.iter().any(|x| !x.is_finite()) {
-        return Err("a row holds a non-finite value".into());
+    let (nf, nc) = params.dims();
+    for r in rows.chunks_exact(ROW_LEN) {
+        if r[..nf].iter().any(|x| !x.is_finite()) {
+            return Err("a row holds a non-finite feature".into());
+        }
+        let angles = &r[NUM_FEATURES..NUM_FEATURES + nc];
+        if angles.iter().any(|x| !x.is_finite()) {
+            return Err(
+                if nc == NUM_CANDIDATES && r[NUM_FEATURES + nc - 1].is_nan() {
+                    "a row has no CNR candidate (rows traced without it: give their stage `cnr = true`)"
+                    .into()
+                } else {
+                    "a row holds a non-finite angle".into()
+                },
+            );
+        }
     }
-    if allowed.is_empty() || allowed.iter().any(|&c| c >= NUM_CANDIDATES) {
+    if allowed.is_empty() || allowed.iter().any(|&c| c >= nc) {
         return Err(format!("allowed candidates {allowed:?}"));
     }
     if params.max_iteration == 0 {
@@ -223,18 +262,21 @@ struct Standardized {
     n: usize,
     mean: Vec<f64>,
     std: Vec<f64>,
-    /// `n × NUM_FEATURES` standardised features
+    /// `n × nf` standardised features
     z: Vec<f64>,
-    /// `n × NUM_CANDIDATES` errors (degrees)
+    /// `n × nc` errors (degrees)
     e: Vec<f64>,
+    nf: usize,
+    nc: usize,
 }
 
 impl Standardized {
-    fn new(rows: &[f32], max_iteration: usize) -> Standardized {
+    /// The first `nf` features and `nc` angles of the rows.
+    fn new(rows: &[f32], max_iteration: usize, nf: usize, nc: usize) -> Standardized {
         let n = rows.len() / ROW_LEN;
         let feature = |j: usize, x: f32| feature_as_read(j, f64::from(x), max_iteration);
-        let mut mean = vec![0.0; NUM_FEATURES];
-        let mut var = [0.0; NUM_FEATURES];
+        let mut mean = vec![0.0; nf];
+        let mut var = vec![0.0; nf];
         for r in rows.chunks_exact(ROW_LEN) {
             for (j, (m, x)) in mean.iter_mut().zip(r).enumerate() {
                 *m += feature(j, *x) / n as f64;
@@ -253,7 +295,7 @@ impl Standardized {
         let z: Vec<f64> = rows
             .chunks_exact(ROW_LEN)
             .flat_map(|r| {
-                r[..NUM_FEATURES]
+                r[..nf]
                     .iter()
                     .zip(&mean)
                     .zip(&std)
@@ -263,36 +305,48 @@ impl Standardized {
             .collect();
         let e: Vec<f64> = rows
             .chunks_exact(ROW_LEN)
-            .flat_map(|r| r[NUM_FEATURES..].iter().map(|x| f64::from(*x).to_degrees()))
+            .flat_map(|r| {
+                r[NUM_FEATURES..NUM_FEATURES + nc]
+                    .iter()
+                    .map(|x| f64::from(*x).to_degrees())
+            })
             .collect();
-        Standardized { n, mean, std, z, e }
+        Standardized {
+            n,
+            mean,
+            std,
+            z,
+            e,
+            nf,
+            nc,
+        }
     }
 
     fn features(&self, i: usize) -> &[f64] {
-        &self.z[i * NUM_FEATURES..(i + 1) * NUM_FEATURES]
+        &self.z[i * self.nf..(i + 1) * self.nf]
     }
 
     fn errors(&self, i: usize) -> &[f64] {
-        &self.e[i * NUM_CANDIDATES..(i + 1) * NUM_CANDIDATES]
+        &self.e[i * self.nc..(i + 1) * self.nc]
     }
 }
 
 /// 0 for an allowed candidate, −10⁹ (added to its bias) for the others.
-fn candidate_mask(allowed: &[usize]) -> [f64; NUM_CANDIDATES] {
-    let mut mask = [-1e9; NUM_CANDIDATES];
+fn candidate_mask(allowed: &[usize], nc: usize) -> Vec<f64> {
+    let mut mask = vec![-1e9; nc];
     for &c in allowed {
         mask[c] = 0.0;
     }
     mask
 }
 
-/// The mean error of each candidate alone, and of the best allowed one per
-/// row (the ceiling of any switch).
-fn candidate_means(e: &[f64], allowed: &[usize]) -> ([f64; NUM_CANDIDATES], f64) {
-    let n = e.len() / NUM_CANDIDATES;
-    let mut candidate_mean_deg = [0.0; NUM_CANDIDATES];
+/// The mean error of each of the `nc` candidates alone, and of the best
+/// allowed one per row (the ceiling of any switch).
+fn candidate_means(e: &[f64], allowed: &[usize], nc: usize) -> (Vec<f64>, f64) {
+    let n = e.len() / nc;
+    let mut candidate_mean_deg = vec![0.0; nc];
     let mut best = 0.0;
-    for ei in e.chunks_exact(NUM_CANDIDATES) {
+    for ei in e.chunks_exact(nc) {
         for (m, x) in candidate_mean_deg.iter_mut().zip(ei) {
             *m += x / n as f64;
         }
@@ -302,24 +356,20 @@ fn candidate_means(e: &[f64], allowed: &[usize]) -> ([f64; NUM_CANDIDATES], f64)
 }
 
 /// Uniform ±1/√fan-in weights, zero biases, the mask on the output biases.
-fn initial_parameters(
-    layout: &Layout,
-    mask: &[f64; NUM_CANDIDATES],
-    rng: &mut ChaCha8Rng,
-) -> Vec<f64> {
+fn initial_parameters(layout: &Layout, mask: &[f64], rng: &mut ChaCha8Rng) -> Vec<f64> {
     use rand::Rng;
-    let h = layout.h;
+    let (h, nf, nc) = (layout.h, layout.nf, layout.nc);
     let mut p = vec![0.0; layout.len()];
-    let s1 = 1.0 / (NUM_FEATURES as f64).sqrt();
+    let s1 = 1.0 / (nf as f64).sqrt();
     let s2 = 1.0 / (h as f64).sqrt();
-    for x in &mut p[..h * NUM_FEATURES] {
+    for x in &mut p[..h * nf] {
         *x = rng.random_range(-s1..s1);
     }
-    let w2_start = h * NUM_FEATURES + h;
-    for x in &mut p[w2_start..w2_start + NUM_CANDIDATES * h] {
+    let w2_start = h * nf + h;
+    for x in &mut p[w2_start..w2_start + nc * h] {
         *x = rng.random_range(-s2..s2);
     }
-    let b2_start = layout.len() - NUM_CANDIDATES;
+    let b2_start = layout.len() - nc;
     for (b, m) in p[b2_start..].iter_mut().zip(mask) {
         *b += m;
     }
@@ -399,7 +449,8 @@ mod tests {
 
     /// Rows where feature 0 says which candidate is right: below 0.5 the
     /// network (0) is exact and the guided pass (1) is 10° off, above it
-    /// the other way round; candidates 2 and 3 are always 20° off.
+    /// the other way round; candidates 2 and 3 are always 20° off; no CNR
+    /// candidate (traced without it).
     fn rows(n: usize) -> Vec<f32> {
         let mut out = Vec::with_capacity(n * ROW_LEN);
         for i in 0..n {
@@ -409,7 +460,7 @@ mod tests {
             r[1] = (i % 7) as f32;
             let ten = 10f32.to_radians();
             let (e0, e1) = if x0 < 0.5 { (0.0, ten) } else { (ten, 0.0) };
-            r[NUM_FEATURES..].copy_from_slice(&[e0, e1, 2.0 * ten, 2.0 * ten]);
+            r[NUM_FEATURES..].copy_from_slice(&[e0, e1, 2.0 * ten, 2.0 * ten, f32::NAN]);
             out.extend(r);
         }
         out
@@ -509,5 +560,60 @@ mod tests {
         let mut bad = data.clone();
         bad[5] = f32::NAN;
         assert!(fit(&bad, &[0], &params).unwrap_err().contains("non-finite"));
+    }
+
+    #[test]
+    fn a_table_with_the_cnr_candidate_reads_its_features() {
+        // feature 12, ∠(net, CNR), says when CNR is exact (below 0.5) or
+        // 30° off; the other candidates are 10-20° off
+        let ten = 10f32.to_radians();
+        let mut data = rows(2000);
+        for (i, r) in data.chunks_exact_mut(ROW_LEN).enumerate() {
+            let x = (i * 53 % 100) as f32 / 100.0;
+            r[BASE_FEATURES] = x;
+            let cnr = if x < 0.5 { 0.0 } else { 3.0 * ten };
+            r[NUM_FEATURES..].copy_from_slice(&[ten, ten, 2.0 * ten, 2.0 * ten, cnr]);
+        }
+        let params = FitParams {
+            epochs: 30,
+            batch: 256,
+            learning_rate: 1e-2,
+            cnr: true,
+            ..FitParams::default()
+        };
+        let (w, report) = fit(&data, &[0, 1, 2, 3, 4], &params).unwrap();
+        assert!(w.reads_cnr() && w.validate().is_ok());
+        assert_eq!(report.candidate_mean_deg.len(), NUM_CANDIDATES);
+        let mut x = [0.1; NUM_FEATURES];
+        x[BASE_FEATURES] = 0.2;
+        assert!(w.probabilities(&x)[4] > 0.9, "{:?}", w.probabilities(&x));
+        x[BASE_FEATURES] = 0.8;
+        assert!(w.probabilities(&x)[4] < 0.1, "{:?}", w.probabilities(&x));
+        // without the candidate the same rows fit a table of four, which
+        // reads neither CNR feature
+        let (w4, _) = fit(
+            &data,
+            &[0, 1, 2, 3],
+            &FitParams {
+                cnr: false,
+                ..params.clone()
+            },
+        )
+        .unwrap();
+        assert!(!w4.reads_cnr() && w4.mean.len() == BASE_FEATURES);
+        assert!(
+            fit(
+                &data,
+                &[4],
+                &FitParams {
+                    cnr: false,
+                    ..params.clone()
+                }
+            )
+            .is_err()
+        );
+        // rows traced without CNR cannot fit a table with it
+        let err = fit(&rows(500), &[0, 1, 2, 3, 4], &params).unwrap_err();
+        assert!(err.contains("no CNR candidate"), "{err}");
     }
 }

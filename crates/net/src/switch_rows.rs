@@ -8,8 +8,11 @@
 //!
 //! Row layout ([`crate::switch_fit::ROW_LEN`] f32 values): the
 //! [`NUM_FEATURES`] features, then the [`NUM_CANDIDATES`] angles in
-//! radians; files of rows are those values little endian, row after row
-//! ([`write_rows`], [`read_rows`]).
+//! radians (CNR's features 0 and its angle NaN in runs traced without it,
+//! [`TraceSettings::cnr`]); files of rows are [`ROWS_MAGIC`] and then those
+//! values little endian, row after row ([`write_rows`], [`read_rows`]).
+//! Files of the earlier layout (no header, 12 features and 4 angles per
+//! row) are read as rows without CNR.
 
 use std::io::Write as _;
 use std::path::Path;
@@ -23,7 +26,8 @@ use crate::NetError;
 use crate::bundle::{Bundle, network_for_iteration};
 use crate::pipeline::{filtered_normals, take_flat_means};
 use crate::switch::{
-    self, ITERATION_FEATURE, NUM_CANDIDATES, NUM_FEATURES, SwitchState, SwitchWeights,
+    self, BASE_CANDIDATES, BASE_FEATURES, CNR, ITERATION_FEATURE, NUM_CANDIDATES, NUM_FEATURES,
+    SwitchState, SwitchWeights,
 };
 use crate::switch_fit::ROW_LEN;
 
@@ -31,7 +35,7 @@ use crate::switch_fit::ROW_LEN;
 #[derive(Clone, Debug)]
 pub enum TracePath {
     /// always candidate `j` (0 the network's output: the paper; 1 guided;
-    /// 2 GNF; 3 stay)
+    /// 2 GNF; 3 stay; 4 CNR)
     Candidate(usize),
     /// per face the candidate closest to the ground truth
     Oracle,
@@ -64,6 +68,10 @@ pub struct TraceSettings {
     /// with [`SwitchWeights::network_on_folds`] never decides those faces,
     /// so their rows would only pull it toward the network elsewhere
     pub skip_folded: bool,
+    /// compute the CNR candidate (CNR's normals of the input,
+    /// [`switch::cnr_normals`]) so that the rows can fit a table with it;
+    /// also whenever the path needs it
+    pub cnr: bool,
 }
 
 impl Default for TraceSettings {
@@ -77,6 +85,7 @@ impl Default for TraceSettings {
             auto_stop_deg: 0.0,
             inference_batch: 256,
             skip_folded: false,
+            cnr: false,
         }
     }
 }
@@ -133,7 +142,10 @@ pub fn trace(
     let mut previous: Option<Vec<Vec3>> = None;
     // the learned path's table for this run, chosen in its first iteration
     let mut run_table: Option<std::borrow::Cow<'_, SwitchWeights>> = None;
-    let mut state = SwitchState::new(noisy, &topology, settings.mu_g);
+    let cnr = settings.cnr
+        || matches!(path, TracePath::Candidate(CNR))
+        || matches!(path, TracePath::Learned(w) if w.needs_cnr());
+    let mut state = SwitchState::new(noisy, &topology, settings.mu_g, cnr);
     let mut out = Trace::default();
     for k in 1..=settings.iterations {
         let current = noisy.with_positions(positions.clone());
@@ -163,7 +175,13 @@ pub fn trace(
         let c = state.candidates(&current, &topology, net);
         let features = switch::features(&topology, &c, k);
         let errors: Vec<[f64; NUM_CANDIDATES]> = (0..n)
-            .map(|f| std::array::from_fn(|j| vec3::angle(c.normals[j][f], gt_normals[f])))
+            .map(|f| {
+                std::array::from_fn(|j| {
+                    c.normals[j]
+                        .get(f)
+                        .map_or(f64::NAN, |n| vec3::angle(*n, gt_normals[f]))
+                })
+            })
             .collect();
         if k >= settings.min_iteration {
             out.rows.reserve(n * ROW_LEN);
@@ -183,6 +201,7 @@ pub fn trace(
             TracePath::Oracle => (0..n)
                 .map(|f| {
                     let best = (0..NUM_CANDIDATES)
+                        .filter(|&j| !c.normals[j].is_empty())
                         .min_by(|&a, &b| errors[f][a].total_cmp(&errors[f][b]))
                         .unwrap_or(0);
                     out.chosen[best] += 1;
@@ -226,12 +245,32 @@ pub fn trace(
     Ok(out)
 }
 
-/// Appends `rows` to `file` (f32 little endian).
+/// The first bytes of a file of rows of [`ROW_LEN`] values.
+pub const ROWS_MAGIC: &[u8; 16] = b"normalnet-rows19";
+
+/// The row length of the files without [`ROWS_MAGIC`] (before the CNR
+/// candidate): the base features, then the base candidates' angles.
+const LEGACY_ROW_LEN: usize = BASE_FEATURES + BASE_CANDIDATES;
+
+/// Appends `rows` to `file` (f32 little endian; [`ROWS_MAGIC`] first where
+/// the file is new or empty).
 ///
 /// # Errors
-/// I/O errors, naming the file.
+/// I/O errors, naming the file; a file of the earlier layout.
 pub fn append_rows(file: &Path, rows: &[f32]) -> Result<(), NetError> {
-    let mut bytes = Vec::with_capacity(rows.len() * 4);
+    let len = std::fs::metadata(file).map_or(0, |m| m.len());
+    let mut bytes = Vec::with_capacity(rows.len() * 4 + ROWS_MAGIC.len());
+    if len == 0 {
+        bytes.extend_from_slice(ROWS_MAGIC);
+    } else if !std::fs::read(file)
+        .map_err(|e| NetError::io(file, e))?
+        .starts_with(ROWS_MAGIC)
+    {
+        return Err(NetError::Record {
+            path: file.to_path_buf(),
+            message: "rows of the earlier layout (no CNR candidate); trace them again".into(),
+        });
+    }
     for x in rows {
         bytes.extend_from_slice(&x.to_le_bytes());
     }
@@ -249,44 +288,61 @@ pub fn append_rows(file: &Path, rows: &[f32]) -> Result<(), NetError> {
 /// # Errors
 /// I/O errors, naming the file.
 pub fn write_rows(file: &Path, rows: &[f32]) -> Result<(), NetError> {
-    let mut bytes = Vec::with_capacity(rows.len() * 4);
+    let mut bytes = Vec::with_capacity(rows.len() * 4 + ROWS_MAGIC.len());
+    bytes.extend_from_slice(ROWS_MAGIC);
     for x in rows {
         bytes.extend_from_slice(&x.to_le_bytes());
     }
     crate::bundle::write_atomically(file, &bytes)
 }
 
-/// The rows of `file`, the rows of iterations before `min_iteration` left
-/// out.
+/// The rows of `file` ([`ROW_LEN`] values each), the rows of iterations
+/// before `min_iteration` left out. A file of the earlier layout gives rows
+/// without CNR (its features 0, its angle NaN).
 ///
 /// # Errors
 /// I/O errors, a file that is not whole rows.
 pub fn read_rows(file: &Path, min_iteration: usize) -> Result<Vec<f32>, NetError> {
     let bytes = std::fs::read(file).map_err(|e| NetError::io(file, e))?;
-    if bytes.len() % (4 * ROW_LEN) != 0 {
+    let (body, row_len) = match bytes.strip_prefix(ROWS_MAGIC.as_slice()) {
+        Some(body) => (body, ROW_LEN),
+        None => (bytes.as_slice(), LEGACY_ROW_LEN),
+    };
+    if body.len() % (4 * row_len) != 0 {
         return Err(NetError::Record {
             path: file.to_path_buf(),
             message: format!(
-                "{} bytes are not whole rows of {ROW_LEN} f32 values",
-                bytes.len()
+                "{} bytes are not whole rows of {row_len} f32 values",
+                body.len()
             ),
         });
     }
-    Ok(bytes
-        .chunks_exact(4 * ROW_LEN)
-        .filter(|row| {
-            let at = 4 * ITERATION_FEATURE;
-            f32::from_le_bytes([row[at], row[at + 1], row[at + 2], row[at + 3]])
-                >= min_iteration as f32
-        })
-        .flat_map(|row| {
-            row.chunks_exact(4)
-                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        })
-        .collect())
+    let mut out = Vec::new();
+    for row in body.chunks_exact(4 * row_len) {
+        let values: Vec<f32> = row
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        if values[ITERATION_FEATURE] < min_iteration as f32 {
+            continue;
+        }
+        if row_len == ROW_LEN {
+            out.extend_from_slice(&values);
+        } else {
+            let (features, angles) = values.split_at(BASE_FEATURES);
+            out.extend_from_slice(features);
+            out.extend(std::iter::repeat_n(0.0, NUM_FEATURES - BASE_FEATURES));
+            out.extend_from_slice(angles);
+            out.extend(std::iter::repeat_n(
+                f32::NAN,
+                NUM_CANDIDATES - BASE_CANDIDATES,
+            ));
+        }
+    }
+    Ok(out)
 }
 
-const _: () = assert!(ITERATION_FEATURE < NUM_FEATURES);
+const _: () = assert!(ITERATION_FEATURE < BASE_FEATURES);
 
 #[cfg(test)]
 mod tests {
@@ -317,6 +373,30 @@ mod tests {
         std::fs::write(&file, [0u8; 6]).unwrap();
         let err = read_rows(&file, 1).unwrap_err().to_string();
         assert!(err.contains("not whole rows"), "{err}");
+        // a file of the earlier layout (12 features, 4 angles, no header)
+        // reads as rows without CNR, and is not appended to
+        let legacy: Vec<f32> = (0..LEGACY_ROW_LEN)
+            .map(|j| {
+                if j == ITERATION_FEATURE {
+                    2.0
+                } else {
+                    j as f32
+                }
+            })
+            .collect();
+        let bytes: Vec<u8> = legacy.iter().flat_map(|x| x.to_le_bytes()).collect();
+        std::fs::write(&file, bytes).unwrap();
+        let read = read_rows(&file, 1).unwrap();
+        assert_eq!(read.len(), ROW_LEN);
+        assert_eq!(read[..BASE_FEATURES], legacy[..BASE_FEATURES]);
+        assert_eq!(read[BASE_FEATURES..NUM_FEATURES], [0.0, 0.0]);
+        assert_eq!(
+            read[NUM_FEATURES..NUM_FEATURES + BASE_CANDIDATES],
+            legacy[BASE_FEATURES..]
+        );
+        assert!(read[NUM_FEATURES + CNR].is_nan());
+        let err = append_rows(&file, &row(1.0)).unwrap_err().to_string();
+        assert!(err.contains("earlier layout"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -140,24 +140,33 @@ pub fn describe(bundle: &Bundle) -> String {
             } else {
                 format!("\n            {}", w.notes)
             };
+            let candidates = |t: &normalnet_net::switch::SwitchWeights| {
+                normalnet_net::switch::CANDIDATES[..t.num_candidates()].join(", ")
+            };
             let late = match &w.late {
                 Some(late) => format!(
-                    "\n            after iteration {}: a late table, {} hidden units; {}",
-                    w.max_iteration, late.hidden, late.notes
+                    "\n            after iteration {}: a late table, {} hidden units, candidates {}; {}",
+                    w.max_iteration,
+                    late.hidden,
+                    candidates(late),
+                    late.notes
                 ),
                 None => String::new(),
             };
             let heavy = match &w.heavy {
                 Some(heavy) => format!(
-                    "\n            runs with noise level ≥ {:.3} rad in iteration 1: a heavy-noise table, {} hidden units; {}",
-                    heavy.from_noise_level, heavy.table.hidden, heavy.table.notes
+                    "\n            runs with noise level ≥ {:.3} rad in iteration 1: a heavy-noise table, {} hidden units, candidates {}; {}",
+                    heavy.from_noise_level,
+                    heavy.table.hidden,
+                    candidates(&heavy.table),
+                    heavy.table.notes
                 ),
                 None => String::new(),
             };
             line(format!(
                 "switch      learned, {} hidden units, candidates {} (--no-switch: the paper's form){notes}{heavy}{late}",
                 w.hidden,
-                normalnet_net::switch::CANDIDATES.join(", "),
+                candidates(w),
             ))
         }
         None => line("switch      none (the paper's form)".into()),

@@ -6,34 +6,22 @@
 //! 3 stages. Training: [`train`]. The shipped model (`models/cnr/cnr.json`)
 //! is built into the library.
 
-pub mod descriptor;
-pub mod model;
 pub mod train;
+
+pub use normalnet_filters::cnr::{BUILTIN_LABEL, descriptor, model, run_cascade, stage_normals};
 
 use std::path::PathBuf;
 
-use normalnet_filters::{FOLD_GUARD_COS, VertexUpdate, VertexUpdateBuffers, vertex_update_with};
-use normalnet_mesh::geometry::mean_edge_length;
+use normalnet_filters::FOLD_GUARD_COS;
 use normalnet_mesh::outliers::denoise_around;
-use normalnet_mesh::vec3::{self, Vec3};
-use normalnet_mesh::{Csr, FaceGeometry, Mesh, Progress, Topology};
-use rayon::prelude::*;
+use normalnet_mesh::{Mesh, Progress};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::DenoiseError;
 use crate::params::{Params, defaults_of, resolve};
 use crate::registry::{Kind, Method, MethodInfo, Outcome};
-use descriptor::{apply_transposed, descriptors};
-use model::{CnrModel, Stage};
-
-/// What the built-in model is called in messages.
-pub const BUILTIN_LABEL: &str = "<built-in models/cnr/cnr.json>";
-
-static BUILTIN: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../models/cnr/cnr.json"
-));
+use model::CnrModel;
 
 /// The registry entry.
 pub const INFO: MethodInfo = MethodInfo {
@@ -89,69 +77,10 @@ pub fn load_model(model: Option<&PathBuf>) -> Result<(CnrModel, String), Denoise
             Ok((CnrModel::parse(&text, &label).map_err(bad)?, label))
         }
         None => Ok((
-            CnrModel::parse(BUILTIN, BUILTIN_LABEL).map_err(bad)?,
+            normalnet_filters::cnr::builtin().map_err(bad)?,
             BUILTIN_LABEL.to_string(),
         )),
     }
-}
-
-/// The normals one stage regresses for every face of `mesh`.
-pub fn stage_normals(stage: &Stage, mesh: &Mesh, topology: &Topology, rings: &Csr) -> Vec<Vec3> {
-    let geometry = FaceGeometry::new(mesh);
-    let l_e = mean_edge_length(mesh, topology);
-    descriptors(&geometry, rings, l_e)
-        .par_iter()
-        .zip(&geometry.normals)
-        .map(|((d, r), &own)| {
-            let y = vec3::normalize_or_zero(stage.predict(d));
-            if y == [0.0; 3] || !y.iter().all(|v| v.is_finite()) {
-                own
-            } else {
-                apply_transposed(r, y)
-            }
-        })
-        .collect()
-}
-
-/// Runs `stages` of `model` on `mesh` (all when 0).
-pub fn run_cascade(
-    model: &CnrModel,
-    mesh: &Mesh,
-    stages: usize,
-    vertex_iterations: usize,
-    fold_guard: Option<f64>,
-    progress: &dyn Progress,
-) -> Mesh {
-    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-    let rings = topology.face_rings(model.ring);
-    let count = if stages == 0 {
-        model.stages.len()
-    } else {
-        stages.min(model.stages.len())
-    };
-    let mut positions = mesh.positions.clone();
-    let mut buffers = VertexUpdateBuffers::default();
-    let update = VertexUpdate {
-        iterations: vertex_iterations,
-        fixed: None,
-        fold_guard,
-    };
-    progress.start("CNR", count as u64);
-    for stage in &model.stages[..count] {
-        let current = mesh.with_positions(positions.clone());
-        let normals = stage_normals(stage, &current, &topology, &rings);
-        vertex_update_with(
-            &mut positions,
-            &mesh.faces,
-            &topology,
-            &normals,
-            &update,
-            &mut buffers,
-        );
-        progress.advance(1);
-    }
-    progress.finish();
-    mesh.with_positions(positions)
 }
 
 struct Cnr {

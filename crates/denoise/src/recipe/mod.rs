@@ -228,6 +228,11 @@ pub struct RowsStage {
     /// never decides those faces (`normalnet_net::switch_rows::TraceSettings::skip_folded`)
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub skip_folded: bool,
+    /// the rows carry the CNR candidate (CNR's normals of each noisy input,
+    /// `normalnet_net::switch::cnr_normals`), for a `switch_fit` with
+    /// `cnr = true`
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cnr: bool,
 }
 
 /// Stage `switch_fit`.
@@ -283,6 +288,9 @@ pub struct FitStage {
     /// (the main table's rule covers the late table's iterations).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub network_on_folds: Option<bool>,
+    /// a table with the CNR candidate (its rows stages need `cnr = true`)
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cnr: bool,
     /// written into the table's `notes`
     #[serde(default)]
     pub notes: String,
@@ -769,6 +777,11 @@ impl Recipe {
                 "a heavy table is fitted on `rows`; a bundle's is not taken".into(),
             ));
         }
+        if s.cnr {
+            return Err(bad(
+                "cnr = true fits a table with the CNR candidate on `rows`; a bundle's table is taken as it is".into(),
+            ));
+        }
         if !s.rows.is_empty() {
             return Err(bad(
                 "a stage takes its table from `bundle` or fits it on `rows`, not both".into(),
@@ -798,6 +811,15 @@ impl Recipe {
         }
         for r in &s.rows {
             self.earlier(i, r, "switch_rows", "rows")?;
+            let traced_with_cnr = matches!(
+                self.index_of(r).map(|j| &self.stages[j]),
+                Some(Stage::SwitchRows(rows)) if rows.cnr
+            );
+            if s.cnr && !traced_with_cnr {
+                return Err(bad(format!(
+                    "a table with the CNR candidate (cnr = true) needs rows traced with it: give stage {r:?} cnr = true"
+                )));
+            }
         }
         if s.hidden == 0 || s.epochs == 0 || s.max_iteration == 0 || s.min_iteration == 0 {
             return Err(bad(

@@ -213,6 +213,7 @@ pub(super) fn switch_rows(
         flat_skip_deg: stage.flat_skip_deg,
         min_iteration: stage.min_iteration,
         skip_folded: stage.skip_folded,
+        cnr: stage.cnr,
         ..TraceSettings::default()
     };
     let config = rows_config(stage);
@@ -333,9 +334,15 @@ pub(super) fn switch_fit(
         epochs: stage.epochs,
         seed: stage.seed,
         max_iteration: stage.max_iteration,
+        cnr: stage.cnr,
         ..FitParams::default()
     };
-    let (mut weights, report) = fit(&rows, &[0, 1, 2, 3], &params).map_err(|e| fail(&e))?;
+    let allowed: Vec<usize> = if stage.cnr {
+        (0..normalnet_net::switch::NUM_CANDIDATES).collect()
+    } else {
+        (0..normalnet_net::switch::BASE_CANDIDATES).collect()
+    };
+    let (mut weights, report) = fit(&rows, &allowed, &params).map_err(|e| fail(&e))?;
     weights.network_on_folds = stage.network_on_folds.unwrap_or(false);
     weights.notes = format!(
         "{}{}fitted by recipe {} stage {:?} ({} hidden, {} epochs, seed {}, iteration clamp {}, iterations {}..{}) on {} rows of {}; expected angle {:.3} deg in the last epoch (per candidate {:.3?}, per-row best {:.3})",

@@ -146,6 +146,11 @@ fn bad_recipes_are_refused_naming_the_stage() {
             expected,
         );
     }
+    // a table with the CNR candidate needs rows traced with it
+    refused(
+        "[[stage]]\nkind = \"switch_rows\"\nname = \"rows\"\nnetworks = \"nets\"\npairs = [{ mesh = \"shape:1\", gaussian = [0.3] }]\n[[stage]]\nkind = \"switch_fit\"\nname = \"main\"\nrows = [\"rows\"]\ncnr = true\n",
+        "needs rows traced with it: give stage \"rows\" cnr = true",
+    );
     refused(
         "[[stage]]\nkind = \"evaluate\"\nname = \"e\"\nsuite = \"missing.toml\"\n",
         "missing.toml",
@@ -183,6 +188,8 @@ fn the_shipped_recipes_load() {
         "lite-mix3-refit.toml",
         "lite-mix3-heavy.toml",
         "lite-heavy-switch.toml",
+        "lite-cnr-switch.toml",
+        "lite-cnr-control.toml",
         "lite-narrow.toml",
         "smoke.toml",
     ] {

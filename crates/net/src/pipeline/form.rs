@@ -11,7 +11,7 @@ use crate::switch::{self, SwitchState, SwitchWeights};
 use std::borrow::Cow;
 
 /// A [`Form`] with what it carries from one iteration to the next (the
-/// switch's GNF state).
+/// switch's GNF state and CNR's normals).
 pub struct Chooser<'a> {
     form: Form<'a>,
     switch_state: Option<SwitchState>,
@@ -34,8 +34,12 @@ pub struct Choice {
 impl<'a> Chooser<'a> {
     /// The chooser of `form` for a run on `mesh` at `mu_g`.
     pub fn new(form: Form<'a>, mesh: &Mesh, topology: &Topology, mu_g: f64) -> Chooser<'a> {
-        let switch_state =
-            matches!(form, Form::Switch(_)).then(|| SwitchState::new(mesh, topology, mu_g));
+        let switch_state = match form {
+            Form::Switch(weights) => {
+                Some(SwitchState::new(mesh, topology, mu_g, weights.needs_cnr()))
+            }
+            _ => None,
+        };
         Chooser {
             form,
             switch_state,

@@ -12,7 +12,7 @@
 //! solver). `R` may then be a reflection; it is used consistently (targets
 //! `R·n`, outputs `Rᵀ·y`).
 
-use normalnet_filters::symmetric_eigen;
+use crate::symmetric_eigen;
 use normalnet_mesh::FaceGeometry;
 use normalnet_mesh::csr::Csr;
 use normalnet_mesh::vec3::{self, Vec3};
