@@ -190,6 +190,7 @@ fn the_shipped_recipes_load() {
         "lite-heavy-switch.toml",
         "lite-cnr-switch.toml",
         "lite-cnr-control.toml",
+        "lite-mix3-cnr-heavy.toml",
         "lite-narrow.toml",
         "smoke.toml",
     ] {
