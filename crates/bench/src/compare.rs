@@ -20,6 +20,9 @@ pub struct GroupDelta {
     pub base: f64,
     /// mean E_a (degrees) of the candidate run's method
     pub candidate: f64,
+    /// how many of its pairs the candidate is lower on: a group's mean can
+    /// hide losses on some of its pairs behind gains on others
+    pub pairs_lower: usize,
 }
 
 impl GroupDelta {
@@ -45,6 +48,60 @@ pub fn read_results(path: &Path) -> anyhow::Result<BenchReport> {
         .with_context(|| format!("{}: not a bench results file", file.display()))
 }
 
+/// One pair's E_a in the two runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairDelta {
+    /// the pair (model)
+    pub model: String,
+    /// E_a (degrees) of the base run's method
+    pub base: f64,
+    /// E_a (degrees) of the candidate run's method
+    pub candidate: f64,
+}
+
+impl PairDelta {
+    /// How much higher the candidate is (degrees; negative: lower).
+    pub fn loss(&self) -> f64 {
+        self.candidate - self.base
+    }
+}
+
+/// Every model of `base`, its E_a of `base_method` in `base` and of
+/// `method` in `candidate`, in the base run's order.
+///
+/// # Errors
+/// A model of `base` without an E_a of the method in either run.
+pub fn pair_deltas(
+    base: &BenchReport,
+    base_method: &str,
+    candidate: &BenchReport,
+    method: &str,
+) -> anyhow::Result<Vec<PairDelta>> {
+    let of = |report: &BenchReport, method: &str| -> HashMap<String, f64> {
+        report
+            .records
+            .iter()
+            .filter(|r| r.method == method)
+            .filter_map(|r| Some((r.model.clone(), r.e_a_deg?)))
+            .collect()
+    };
+    let (b, c) = (of(base, base_method), of(candidate, method));
+    base.models
+        .iter()
+        .map(|model| {
+            let get = |e: &HashMap<String, f64>, run: &str, m: &str| match e.get(model) {
+                Some(v) => Ok(*v),
+                None => bail!("the {run} run has no E_a of {m} on {model}"),
+            };
+            Ok(PairDelta {
+                model: model.clone(),
+                base: get(&b, "base", base_method)?,
+                candidate: get(&c, "candidate", method)?,
+            })
+        })
+        .collect()
+}
+
 /// Per group of `base` (then `all`: every model of `base`), the mean E_a
 /// of `base_method` in `base` and of `method` in `candidate`.
 ///
@@ -57,25 +114,10 @@ pub fn compare(
     candidate: &BenchReport,
     method: &str,
 ) -> anyhow::Result<Vec<GroupDelta>> {
-    let of = |report: &BenchReport, method: &str| -> HashMap<String, f64> {
-        report
-            .records
-            .iter()
-            .filter(|r| r.method == method)
-            .filter_map(|r| Some((r.model.clone(), r.e_a_deg?)))
-            .collect()
-    };
-    let (b, c) = (of(base, base_method), of(candidate, method));
-    let mean = |models: &[String], e: &HashMap<String, f64>, run: &str, m: &str| {
-        let mut sum = 0.0;
-        for model in models {
-            match e.get(model) {
-                Some(v) => sum += v,
-                None => bail!("the {run} run has no E_a of {m} on {model}"),
-            }
-        }
-        Ok(sum / models.len().max(1) as f64)
-    };
+    let pairs: HashMap<String, PairDelta> = pair_deltas(base, base_method, candidate, method)?
+        .into_iter()
+        .map(|d| (d.model.clone(), d))
+        .collect();
     let all = ("all".to_string(), base.models.clone());
     let groups = base
         .groups
@@ -84,12 +126,25 @@ pub fn compare(
     groups
         .chain(std::iter::once(all))
         .map(|(group, models)| {
-            Ok(GroupDelta {
+            let mut delta = GroupDelta {
                 pairs: models.len(),
-                base: mean(&models, &b, "base", base_method)?,
-                candidate: mean(&models, &c, "candidate", method)?,
+                base: 0.0,
+                candidate: 0.0,
+                pairs_lower: 0,
                 group,
-            })
+            };
+            for model in &models {
+                let Some(d) = pairs.get(model) else {
+                    bail!("group {}: {model} is no pair of the base run", delta.group);
+                };
+                delta.base += d.base;
+                delta.candidate += d.candidate;
+                delta.pairs_lower += usize::from(d.candidate < d.base);
+            }
+            let n = models.len().max(1) as f64;
+            delta.base /= n;
+            delta.candidate /= n;
+            Ok(delta)
         })
         .collect()
 }
@@ -128,18 +183,25 @@ mod tests {
         let base = report("normalnet", &[("a", 1.0), ("b", 3.0), ("c", 5.0)], groups);
         let cand = report("x", &[("a", 2.0), ("b", 1.0), ("c", 6.0)], &[]);
         let d = compare(&base, "normalnet", &cand, "x").unwrap();
-        let got: Vec<(&str, usize, f64, f64, bool)> = d
+        let got: Vec<(&str, usize, f64, f64, bool, usize)> = d
             .iter()
-            .map(|g| (g.group.as_str(), g.pairs, g.base, g.candidate, g.wins()))
+            .map(|g| {
+                let row = (g.group.as_str(), g.pairs, g.base, g.candidate);
+                (row.0, row.1, row.2, row.3, g.wins(), g.pairs_lower)
+            })
             .collect();
         assert_eq!(
             got,
             [
-                ("mild", 2, 2.0, 1.5, true),
-                ("heavy", 2, 4.0, 3.5, true),
-                ("all", 3, 3.0, 3.0, false),
+                ("mild", 2, 2.0, 1.5, true, 1),
+                ("heavy", 2, 4.0, 3.5, true, 1),
+                ("all", 3, 3.0, 3.0, false, 1),
             ]
         );
+        // per pair: the mild group's mean wins while pair a loses 1°
+        let pairs = pair_deltas(&base, "normalnet", &cand, "x").unwrap();
+        let losses: Vec<(&str, f64)> = pairs.iter().map(|p| (p.model.as_str(), p.loss())).collect();
+        assert_eq!(losses, [("a", 1.0), ("b", -2.0), ("c", 1.0)]);
         // a pair the candidate lacks (or the wrong method) is an error
         let short = report("x", &[("a", 2.0), ("b", 1.0)], &[]);
         let err = compare(&base, "normalnet", &short, "x")

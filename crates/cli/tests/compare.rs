@@ -1,5 +1,6 @@
 //! `normalnet compare` on two hand-written bench results: the group table,
-//! the JSON, and a clear error for a pair the candidate lacks.
+//! the pairs lost, the JSON, and a clear error for a pair the candidate
+//! lacks.
 
 mod common;
 
@@ -38,10 +39,28 @@ fn compare_prints_per_group_means_and_who_wins() {
         "{text}"
     );
     assert!(text.contains("lower on 1 of 2"), "{text}");
+    // per group the pairs it is lower on; the pairs it loses by more than
+    // the margin (0.5° by default): the mild mean wins while a loses 0.5°
+    assert!(text.contains("wins   1 of 2 pairs"), "{text}");
+    assert!(
+        text.contains("1 pairs higher by more than 0.50 deg"),
+        "{text}"
+    );
+    assert!(text.contains("  c "), "{text}");
+    let o = normalnet(&["compare", s(&base), s(&cand), "--worse-than", "0.4"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("2 pairs higher by more than 0.40 deg"),
+        "{text}"
+    );
+    let o = normalnet(&["compare", s(&base), s(&cand), "--worse-than=-1"]);
+    assert!(!o.status.success() && stderr(&o).contains("--worse-than"));
     let o = normalnet(&["compare", s(&base), s(&cand), "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["wins"], 1);
     assert_eq!(v["groups"][0]["group"], "mild");
+    assert_eq!(v["groups"][0]["pairs_lower"], 1);
+    assert_eq!(v["worse"][0]["model"], "c");
     // a pair the candidate lacks
     let short = results(dir.path(), "short", &[("a", 1.0), ("b", 1.0)]);
     let o = normalnet(&["compare", s(&base), s(&short)]);
