@@ -163,7 +163,8 @@ impl Method for NormalNet {
             let m = match &self.cnr {
                 Some(model) => {
                     let guard = params.fold_guard.then_some(params.fold_guard_cos);
-                    before = run_cascade(model, m, self.params.cnr_before, 20, guard, progress);
+                    let passes = normalnet_filters::cnr::VERTEX_ITERATIONS;
+                    before = run_cascade(model, m, self.params.cnr_before, passes, guard, progress);
                     &before
                 }
                 None => m,

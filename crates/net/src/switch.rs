@@ -36,7 +36,7 @@
 //! a whole run when its input's noise level (feature 9 of the first
 //! iteration) is high ([`SwitchWeights::for_run`]).
 
-use normalnet_filters::cnr::{builtin, run_cascade};
+use normalnet_filters::cnr::{VERTEX_ITERATIONS, builtin, run_cascade};
 use normalnet_filters::gt_guided::{GT_GUIDED_SIGMA_S, gt_guided_pass};
 use normalnet_filters::{FOLD_GUARD_COS, FoldCheck, Gnf, GnfParams, NormalFilter};
 use normalnet_mesh::geometry::face_normals;
@@ -90,6 +90,16 @@ pub const BASE_CANDIDATES: usize = 4;
 
 /// Index of the CNR candidate.
 pub const CNR: usize = 4;
+
+/// The features a table reads and its candidates: all of them with the CNR
+/// candidate, else the base ones.
+pub const fn table_dims(cnr: bool) -> (usize, usize) {
+    if cnr {
+        (NUM_FEATURES, NUM_CANDIDATES)
+    } else {
+        (BASE_FEATURES, BASE_CANDIDATES)
+    }
+}
 
 /// A perceptron with one tanh hidden layer: `softmax(W2·tanh(W1·z + b1) + b2)`
 /// with `z = (x − mean) / std`. Row-major: `w1` is hidden × features, `w2`
@@ -250,20 +260,12 @@ impl SwitchWeights {
 
     /// The candidates of this table.
     pub fn num_candidates(&self) -> usize {
-        if self.reads_cnr() {
-            NUM_CANDIDATES
-        } else {
-            BASE_CANDIDATES
-        }
+        table_dims(self.reads_cnr()).1
     }
 
     /// The features this table reads (the first ones of a row).
     pub fn num_features(&self) -> usize {
-        if self.reads_cnr() {
-            NUM_FEATURES
-        } else {
-            BASE_FEATURES
-        }
+        table_dims(self.reads_cnr()).0
     }
 
     /// The table of a run whose first iteration has noise level
@@ -359,19 +361,16 @@ pub struct SwitchState {
     cnr: Vec<Vec3>,
 }
 
-/// Vertex passes after each CNR stage (CNR's default).
-const CNR_VERTEX_ITERATIONS: usize = 20;
-
 /// The face normals of the built-in CNR cascade (every stage, 20 vertex
 /// passes each, the fold guard) run on `mesh`.
 pub fn cnr_normals(mesh: &Mesh) -> Vec<Vec3> {
     // the built-in model is the library's own file: it parses (a test says so)
     let model = builtin().expect("the built-in CNR model parses");
     let out = run_cascade(
-        &model,
+        model,
         mesh,
         0,
-        CNR_VERTEX_ITERATIONS,
+        VERTEX_ITERATIONS,
         Some(FOLD_GUARD_COS),
         &NoProgress,
     );

@@ -13,8 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::switch::{
-    BASE_CANDIDATES, BASE_FEATURES, DEFAULT_MAX_ITERATION, NUM_CANDIDATES, NUM_FEATURES,
-    SwitchWeights, feature_as_read,
+    DEFAULT_MAX_ITERATION, NUM_CANDIDATES, NUM_FEATURES, SwitchWeights, feature_as_read, table_dims,
 };
 
 /// One training row: features, then each candidate's angle to the ground
@@ -58,12 +57,8 @@ impl Default for FitParams {
 
 impl FitParams {
     /// The features and candidates of the table it fits.
-    fn dims(&self) -> (usize, usize) {
-        if self.cnr {
-            (NUM_FEATURES, NUM_CANDIDATES)
-        } else {
-            (BASE_FEATURES, BASE_CANDIDATES)
-        }
+    pub fn dims(&self) -> (usize, usize) {
+        table_dims(self.cnr)
     }
 }
 
@@ -445,7 +440,7 @@ impl Adam {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::switch::ITERATION_FEATURE;
+    use crate::switch::{BASE_FEATURES, ITERATION_FEATURE};
 
     /// Rows where feature 0 says which candidate is right: below 0.5 the
     /// network (0) is exact and the guided pass (1) is 10° off, above it

@@ -14,7 +14,7 @@
 //! Files of the earlier layout (no header, 12 features and 4 angles per
 //! row) are read as rows without CNR.
 
-use std::io::Write as _;
+use std::io::{Read as _, Write as _};
 use std::path::Path;
 
 use normalnet_filters::{FOLD_GUARD_COS, VertexUpdate, VertexUpdateBuffers, vertex_update_with};
@@ -252,6 +252,18 @@ pub const ROWS_MAGIC: &[u8; 16] = b"normalnet-rows19";
 /// candidate): the base features, then the base candidates' angles.
 const LEGACY_ROW_LEN: usize = BASE_FEATURES + BASE_CANDIDATES;
 
+/// `rows` as little-endian bytes, after [`ROWS_MAGIC`] where `header`.
+fn row_bytes(rows: &[f32], header: bool) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(rows.len() * 4 + ROWS_MAGIC.len());
+    if header {
+        bytes.extend_from_slice(ROWS_MAGIC);
+    }
+    for x in rows {
+        bytes.extend_from_slice(&x.to_le_bytes());
+    }
+    bytes
+}
+
 /// Appends `rows` to `file` (f32 little endian; [`ROWS_MAGIC`] first where
 /// the file is new or empty).
 ///
@@ -259,21 +271,20 @@ const LEGACY_ROW_LEN: usize = BASE_FEATURES + BASE_CANDIDATES;
 /// I/O errors, naming the file; a file of the earlier layout.
 pub fn append_rows(file: &Path, rows: &[f32]) -> Result<(), NetError> {
     let len = std::fs::metadata(file).map_or(0, |m| m.len());
-    let mut bytes = Vec::with_capacity(rows.len() * 4 + ROWS_MAGIC.len());
-    if len == 0 {
-        bytes.extend_from_slice(ROWS_MAGIC);
-    } else if !std::fs::read(file)
-        .map_err(|e| NetError::io(file, e))?
-        .starts_with(ROWS_MAGIC)
-    {
-        return Err(NetError::Record {
-            path: file.to_path_buf(),
-            message: "rows of the earlier layout (no CNR candidate); trace them again".into(),
-        });
+    if len > 0 {
+        // only the header says the layout: read it alone
+        let mut head = Vec::with_capacity(ROWS_MAGIC.len());
+        std::fs::File::open(file)
+            .and_then(|f| std::io::Read::take(f, ROWS_MAGIC.len() as u64).read_to_end(&mut head))
+            .map_err(|e| NetError::io(file, e))?;
+        if head != ROWS_MAGIC {
+            return Err(NetError::Record {
+                path: file.to_path_buf(),
+                message: "rows of the earlier layout (no CNR candidate); trace them again".into(),
+            });
+        }
     }
-    for x in rows {
-        bytes.extend_from_slice(&x.to_le_bytes());
-    }
+    let bytes = row_bytes(rows, len == 0);
     std::fs::OpenOptions::new()
         .create(true)
         .append(true)
@@ -288,12 +299,7 @@ pub fn append_rows(file: &Path, rows: &[f32]) -> Result<(), NetError> {
 /// # Errors
 /// I/O errors, naming the file.
 pub fn write_rows(file: &Path, rows: &[f32]) -> Result<(), NetError> {
-    let mut bytes = Vec::with_capacity(rows.len() * 4 + ROWS_MAGIC.len());
-    bytes.extend_from_slice(ROWS_MAGIC);
-    for x in rows {
-        bytes.extend_from_slice(&x.to_le_bytes());
-    }
-    crate::bundle::write_atomically(file, &bytes)
+    crate::bundle::write_atomically(file, &row_bytes(rows, true))
 }
 
 /// The rows of `file` ([`ROW_LEN`] values each), the rows of iterations
@@ -318,16 +324,17 @@ pub fn read_rows(file: &Path, min_iteration: usize) -> Result<Vec<f32>, NetError
         });
     }
     let mut out = Vec::new();
+    let mut row_values = [0f32; ROW_LEN];
     for row in body.chunks_exact(4 * row_len) {
-        let values: Vec<f32> = row
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
+        let values = &mut row_values[..row_len];
+        for (v, b) in values.iter_mut().zip(row.chunks_exact(4)) {
+            *v = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        }
         if values[ITERATION_FEATURE] < min_iteration as f32 {
             continue;
         }
         if row_len == ROW_LEN {
-            out.extend_from_slice(&values);
+            out.extend_from_slice(values);
         } else {
             let (features, angles) = values.split_at(BASE_FEATURES);
             out.extend_from_slice(features);

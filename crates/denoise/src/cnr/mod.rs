@@ -57,7 +57,7 @@ impl Default for CnrParams {
         CnrParams {
             model: None,
             stages: 0,
-            vertex_iterations: 20,
+            vertex_iterations: normalnet_filters::cnr::VERTEX_ITERATIONS,
             fold_guard: true,
         }
     }
@@ -77,7 +77,7 @@ pub fn load_model(model: Option<&PathBuf>) -> Result<(CnrModel, String), Denoise
             Ok((CnrModel::parse(&text, &label).map_err(bad)?, label))
         }
         None => Ok((
-            normalnet_filters::cnr::builtin().map_err(bad)?,
+            normalnet_filters::cnr::builtin().map_err(bad)?.clone(),
             BUILTIN_LABEL.to_string(),
         )),
     }

@@ -337,11 +337,7 @@ pub(super) fn switch_fit(
         cnr: stage.cnr,
         ..FitParams::default()
     };
-    let allowed: Vec<usize> = if stage.cnr {
-        (0..normalnet_net::switch::NUM_CANDIDATES).collect()
-    } else {
-        (0..normalnet_net::switch::BASE_CANDIDATES).collect()
-    };
+    let allowed: Vec<usize> = (0..params.dims().1).collect();
     let (mut weights, report) = fit(&rows, &allowed, &params).map_err(|e| fail(&e))?;
     weights.network_on_folds = stage.network_on_folds.unwrap_or(false);
     weights.notes = format!(

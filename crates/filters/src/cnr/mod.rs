@@ -15,6 +15,7 @@ use normalnet_mesh::geometry::mean_edge_length;
 use normalnet_mesh::vec3::{self, Vec3};
 use normalnet_mesh::{Csr, FaceGeometry, Mesh, Progress, Topology};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 use crate::{VertexUpdate, VertexUpdateBuffers, vertex_update_with};
 use descriptor::{apply_transposed, descriptors};
@@ -28,9 +29,16 @@ static BUILTIN: &str = include_str!(concat!(
     "/../../models/cnr/cnr.json"
 ));
 
-/// The built-in model (`models/cnr/cnr.json`, parsed on each call).
-pub fn builtin() -> Result<CnrModel, String> {
-    CnrModel::parse(BUILTIN, BUILTIN_LABEL)
+/// Vertex-update passes after each stage (CNR's default).
+pub const VERTEX_ITERATIONS: usize = 20;
+
+/// The built-in model (`models/cnr/cnr.json`, parsed once).
+pub fn builtin() -> Result<&'static CnrModel, String> {
+    static MODEL: OnceLock<Result<CnrModel, String>> = OnceLock::new();
+    MODEL
+        .get_or_init(|| CnrModel::parse(BUILTIN, BUILTIN_LABEL))
+        .as_ref()
+        .map_err(Clone::clone)
 }
 
 /// The normals one stage regresses for every face of `mesh`.
