@@ -198,3 +198,41 @@ impl<'a> NetworkPass<'a> {
         Ok(times)
     }
 }
+
+/// Turns the network outputs of `faces` in `normals` (those of yaw 0) into
+/// the normalised mean over `views` yaws, 360°/`views` apart: evaluates
+/// the other `views − 1` yaws. A face whose views cancel keeps yaw 0's.
+///
+/// # Errors
+/// As [`filtered_normals`].
+pub fn mean_over_yaws(
+    pass: &NetworkPass<'_>,
+    mesh: &Mesh,
+    topology: &Topology,
+    faces: &[u32],
+    views: usize,
+    normals: &mut [Vec3],
+) -> Result<StageTimes, NetError> {
+    let mut times = StageTimes::default();
+    if views <= 1 {
+        return Ok(times);
+    }
+    let mut sums: Vec<Vec3> = faces.iter().map(|&f| normals[f as usize]).collect();
+    let mut turned = normals.to_vec();
+    for v in 1..views {
+        let yaw = std::f64::consts::TAU * v as f64 / views as f64;
+        let yaws = vec![yaw; mesh.num_faces()];
+        let progress = normalnet_mesh::progress::NoProgress;
+        times.add(&pass.normals_of(mesh, topology, faces, Some(&yaws), &mut turned, &progress)?);
+        for (sum, &f) in sums.iter_mut().zip(faces) {
+            *sum = vec3::add(*sum, turned[f as usize]);
+        }
+    }
+    for (sum, &f) in sums.iter().zip(faces) {
+        let unit = vec3::normalize_or_zero(*sum);
+        if unit != [0.0; 3] {
+            normals[f as usize] = unit;
+        }
+    }
+    Ok(times)
+}

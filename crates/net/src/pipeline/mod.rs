@@ -73,6 +73,17 @@ pub fn denoise(
         let pass = NetworkPass::of_bundle(bundle, i, slot, params.batch);
         let active = &selection.active;
         times.add(&pass.normals_of(&current, &topology, active, None, &mut normals, progress)?);
+        if params.yaw_views > 1 && (params.yaw_views_until == 0 || k <= params.yaw_views_until) {
+            let views = params.yaw_views;
+            times.add(&evaluate::mean_over_yaws(
+                &pass,
+                &current,
+                &topology,
+                active,
+                views,
+                &mut normals,
+            )?);
+        }
         progress.advance((n - active.len()) as u64);
         let changes = previous.as_ref().map(|p| changes_deg(p, &normals));
         skips.record(k, i, &selection, &normals, changes.as_deref());

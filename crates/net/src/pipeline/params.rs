@@ -94,6 +94,16 @@ pub struct DenoiseParams {
     /// guided pass, a GNF pass and the current normal. false (or a bundle
     /// without a switch): the paper's form (and `guided_from`).
     pub switch: bool,
+    /// Yaw views: each face's network output is the normalised mean of
+    /// this many evaluations, its local frame turned about its y axis by
+    /// 360°/views between them (the network is trained with random yaw, so
+    /// its outputs vary with it; the mean is steadier). 1 = one evaluation
+    /// at yaw 0, the paper's pipeline (default). Costs the network's time
+    /// this many times.
+    pub yaw_views: usize,
+    /// With `yaw_views` > 1: only filtering iterations 1 ..= this one take
+    /// the views (0 = every iteration).
+    pub yaw_views_until: usize,
 }
 
 impl Default for DenoiseParams {
@@ -114,6 +124,8 @@ impl Default for DenoiseParams {
             reuse_move: REUSE_MOVE,
             auto_stop_deg: 1.0,
             switch: true,
+            yaw_views: 1,
+            yaw_views_until: 0,
         }
     }
 }
@@ -126,6 +138,12 @@ impl DenoiseParams {
 
     /// Checks the ranges; the error names the field.
     pub fn validate(&self) -> Result<(), NetError> {
+        if !(1..=8).contains(&self.yaw_views) {
+            return Err(NetError::InvalidParameter {
+                name: "yaw_views",
+                message: format!("{} yaw views: 1 to 8", self.yaw_views),
+            });
+        }
         if self.iterations == 0 {
             return Err(NetError::InvalidParameter {
                 name: "iterations",

@@ -633,3 +633,57 @@ fn traced_rows_can_leave_out_the_folded_faces() {
 fn same_bits(a: &[f32], b: &[f32]) -> bool {
     a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
+
+/// `yaw_views`: each face's output is the normalised sum of the outputs at
+/// yaws 0, 360°/V, …; one view leaves the outputs as they are.
+#[test]
+fn yaw_views_average_the_outputs_of_turned_frames() {
+    let net = engine(9);
+    let mesh = shape();
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let pass = NetworkPass {
+        cnn: &net,
+        residual: false,
+        voxel: VoxelParams::tiny(),
+        slot: 2,
+        batch: 64,
+    };
+    let faces: Vec<u32> = (0..mesh.num_faces() as u32).step_by(3).collect();
+    let at_yaw = |yaw: f64| run(&mesh, &net, Some(&vec![yaw; mesh.num_faces()]));
+    let zero = at_yaw(0.0);
+    let half = at_yaw(std::f64::consts::PI);
+    let mut normals = zero.clone();
+    evaluate::mean_over_yaws(&pass, &mesh, &topology, &faces, 2, &mut normals).unwrap();
+    for f in 0..mesh.num_faces() {
+        match f % 3 {
+            0 => {
+                let mean = vec3::normalize_or_zero(vec3::add(zero[f], half[f]));
+                assert!(vec3::angle(normals[f], mean) < 1e-6, "face {f}");
+            }
+            _ => assert_eq!(normals[f], zero[f], "face {f}: not listed, untouched"),
+        }
+    }
+    // an untrained network is not yaw-invariant: the mean moved the outputs
+    let moved = angles_deg(&normals, &zero);
+    assert!(
+        moved.iter().any(|&e| e > 1.0),
+        "largest {:?}",
+        moved.iter().cloned().fold(0.0, f64::max)
+    );
+    // one view: nothing to average
+    let mut one = zero.clone();
+    evaluate::mean_over_yaws(&pass, &mesh, &topology, &faces, 1, &mut one).unwrap();
+    assert_eq!(one, zero);
+}
+
+#[test]
+fn yaw_views_out_of_range_are_refused() {
+    for views in [0, 9] {
+        let params = DenoiseParams {
+            yaw_views: views,
+            ..DenoiseParams::default()
+        };
+        let e = params.validate().unwrap_err().to_string();
+        assert!(e.contains("yaw_views"), "{e}");
+    }
+}
