@@ -428,6 +428,19 @@ fn ring_angles(topology: &Topology, normals: &[Vec3], f: usize) -> (f64, f64) {
     (sum / ring.len() as f64, max)
 }
 
+/// The noise level of a mesh with face normals `normals`: the median over
+/// faces of the mean angle (radians) between a face's normal and its
+/// 1-ring's ([`NOISE_LEVEL_FEATURE`] in iteration 1).
+pub fn noise_level(topology: &Topology, normals: &[Vec3]) -> f64 {
+    median(
+        (0..normals.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|f| ring_angles(topology, normals, f).0)
+            .collect(),
+    )
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return 0.0;

@@ -62,6 +62,7 @@ pub fn denoise(
     let mut updater = Updater::new(mesh, params);
     let mut times = StageTimes::default();
     let mut previous: Option<Vec<Vec3>> = None;
+    let views = yaw_views(params, mesh, &topology);
     progress.start("NormalNet", (params.iterations * n) as u64);
     for k in 1..=params.iterations {
         let iteration_start = Instant::now();
@@ -73,8 +74,7 @@ pub fn denoise(
         let pass = NetworkPass::of_bundle(bundle, i, slot, params.batch);
         let active = &selection.active;
         times.add(&pass.normals_of(&current, &topology, active, None, &mut normals, progress)?);
-        if params.yaw_views > 1 && (params.yaw_views_until == 0 || k <= params.yaw_views_until) {
-            let views = params.yaw_views;
+        if views > 1 && (params.yaw_views_until == 0 || k <= params.yaw_views_until) {
             times.add(&evaluate::mean_over_yaws(
                 &pass,
                 &current,
@@ -108,6 +108,19 @@ pub fn denoise(
     progress.finish();
     times.total_s = start.elapsed().as_secs_f64();
     Ok((mesh.with_positions(positions), times))
+}
+
+/// The yaw views of this run: `params.yaw_views`, or 1 where the input's
+/// noise level is below `params.yaw_views_from_noise`.
+fn yaw_views(params: &DenoiseParams, mesh: &Mesh, topology: &Topology) -> usize {
+    if params.yaw_views <= 1 || params.yaw_views_from_noise <= 0.0 {
+        return params.yaw_views;
+    }
+    let normals = normalnet_mesh::geometry::face_normals(mesh);
+    match crate::switch::noise_level(topology, &normals) >= params.yaw_views_from_noise {
+        true => params.yaw_views,
+        false => 1,
+    }
 }
 
 /// The update stage: N_v vertex updates towards the filtered normals, with

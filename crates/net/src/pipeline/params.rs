@@ -104,6 +104,11 @@ pub struct DenoiseParams {
     /// With `yaw_views` > 1: only filtering iterations 1 ..= this one take
     /// the views (0 = every iteration).
     pub yaw_views_until: usize,
+    /// With `yaw_views` > 1: only runs whose input's noise level (the
+    /// median over faces of the mean angle in radians between a face's
+    /// normal and its 1-ring's, [`switch::noise_level`]) reaches this take
+    /// the views (0 = every run).
+    pub yaw_views_from_noise: f64,
 }
 
 impl Default for DenoiseParams {
@@ -126,6 +131,7 @@ impl Default for DenoiseParams {
             switch: true,
             yaw_views: 1,
             yaw_views_until: 0,
+            yaw_views_from_noise: 0.0,
         }
     }
 }
@@ -138,6 +144,12 @@ impl DenoiseParams {
 
     /// Checks the ranges; the error names the field.
     pub fn validate(&self) -> Result<(), NetError> {
+        if !(self.yaw_views_from_noise.is_finite() && self.yaw_views_from_noise >= 0.0) {
+            return Err(NetError::InvalidParameter {
+                name: "yaw_views_from_noise",
+                message: format!("{} must be an angle ≥ 0", self.yaw_views_from_noise),
+            });
+        }
         if !(1..=8).contains(&self.yaw_views) {
             return Err(NetError::InvalidParameter {
                 name: "yaw_views",

@@ -686,4 +686,47 @@ fn yaw_views_out_of_range_are_refused() {
         let e = params.validate().unwrap_err().to_string();
         assert!(e.contains("yaw_views"), "{e}");
     }
+    for from in [-0.1, f64::NAN] {
+        let params = DenoiseParams {
+            yaw_views_from_noise: from,
+            ..DenoiseParams::default()
+        };
+        let e = params.validate().unwrap_err().to_string();
+        assert!(e.contains("yaw_views_from_noise"), "{e}");
+    }
+}
+
+/// `yaw_views_from_noise`: the views run only where the input's noise
+/// level (the heavy table's router) reaches the threshold; below it the
+/// run is the one-view run, bit for bit.
+#[test]
+fn yaw_views_from_noise_gate_the_views_on_the_input_noise_level() {
+    use crate::switch::{NOISE_LEVEL_FEATURE, SwitchState, features};
+    let bundle = tiny_bundle();
+    let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let mut state = SwitchState::new(&mesh, &topology, 0.3, false);
+    let c = state.candidates(&mesh, &topology, face_normals(&mesh));
+    let level = features(&topology, &c, 1)[0][NOISE_LEVEL_FEATURE];
+    assert!(level > 0.0);
+    assert!((crate::switch::noise_level(&topology, &face_normals(&mesh)) - level).abs() < 1e-12);
+    let run = |views: usize, from: f64| {
+        let params = DenoiseParams {
+            iterations: 2,
+            vertex_iterations: 3,
+            auto_stop_deg: 0.0,
+            yaw_views: views,
+            yaw_views_from_noise: from,
+            ..DenoiseParams::default()
+        };
+        denoise(&mesh, &bundle, &params, &NoProgress)
+            .unwrap()
+            .0
+            .positions
+    };
+    let one = run(1, 0.0);
+    let two = run(2, 0.0);
+    assert_ne!(one, two, "two views move the result");
+    assert_eq!(run(2, level * 1.01), one, "below the threshold: one view");
+    assert_eq!(run(2, level), two, "from it: the views");
 }
