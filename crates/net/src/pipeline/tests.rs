@@ -324,16 +324,11 @@ fn the_learned_switch_blends_candidates_and_is_optional() {
 
 #[test]
 fn a_run_whose_noise_level_reaches_the_heavy_threshold_uses_the_heavy_table() {
+    use crate::switch::HeavyTable;
     use crate::switch::tests::constant;
-    use crate::switch::{HeavyTable, NOISE_LEVEL_FEATURE, SwitchState, features};
     let mut bundle = tiny_bundle();
     let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
-    // the mesh's noise level, as the run's first iteration sees it
-    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-    let mut state = SwitchState::new(&mesh, &topology, 0.3, false);
-    let c = state.candidates(&mesh, &topology, face_normals(&mesh));
-    let level = features(&topology, &c, 1)[0][NOISE_LEVEL_FEATURE];
-    assert!(level > 0.0);
+    let level = first_noise_level(&mesh);
     let params = DenoiseParams {
         iterations: 2,
         vertex_iterations: 3,
@@ -701,14 +696,10 @@ fn yaw_views_out_of_range_are_refused() {
 /// run is the one-view run, bit for bit.
 #[test]
 fn yaw_views_from_noise_gate_the_views_on_the_input_noise_level() {
-    use crate::switch::{NOISE_LEVEL_FEATURE, SwitchState, features};
     let bundle = tiny_bundle();
     let mesh = normalnet_voxel::shapes::generate_seeded(5, 200).unwrap();
+    let level = first_noise_level(&mesh);
     let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
-    let mut state = SwitchState::new(&mesh, &topology, 0.3, false);
-    let c = state.candidates(&mesh, &topology, face_normals(&mesh));
-    let level = features(&topology, &c, 1)[0][NOISE_LEVEL_FEATURE];
-    assert!(level > 0.0);
     assert!((crate::switch::noise_level(&topology, &face_normals(&mesh)) - level).abs() < 1e-12);
     let run = |views: usize, from: f64| {
         let params = DenoiseParams {
@@ -729,4 +720,16 @@ fn yaw_views_from_noise_gate_the_views_on_the_input_noise_level() {
     assert_ne!(one, two, "two views move the result");
     assert_eq!(run(2, level * 1.01), one, "below the threshold: one view");
     assert_eq!(run(2, level), two, "from it: the views");
+}
+
+/// The mesh's noise level as the switch's features see it in a run's first
+/// iteration ([`crate::switch::NOISE_LEVEL_FEATURE`]); positive.
+fn first_noise_level(mesh: &Mesh) -> f64 {
+    use crate::switch::{NOISE_LEVEL_FEATURE, SwitchState, features};
+    let topology = Topology::new(mesh.num_vertices(), &mesh.faces);
+    let mut state = SwitchState::new(mesh, &topology, 0.3, false);
+    let c = state.candidates(mesh, &topology, face_normals(mesh));
+    let level = features(&topology, &c, 1)[0][NOISE_LEVEL_FEATURE];
+    assert!(level > 0.0);
+    level
 }
