@@ -22,7 +22,8 @@ pub mod stats;
 
 pub use evaluate::{NetworkPass, filtered_normals};
 pub use params::{
-    DenoiseParams, FLAT_SKIP_DEG, FREEZE_DEG, Form, GuidedLimit, REUSE_MOVE, StopRule,
+    DenoiseParams, FLAT_SKIP_DEG, FREEZE_DEG, Form, GuidedLimit, REUSE_MOVE, StopRule, YAW_VIEWS,
+    YAW_VIEWS_FROM_NOISE, YAW_VIEWS_UNTIL,
 };
 pub use skips::{flat_patches, take_flat_means};
 pub use stats::{IterationStats, StageTimes};

@@ -98,16 +98,18 @@ pub struct DenoiseParams {
     /// this many evaluations, its local frame turned about its y axis by
     /// 360°/views between them (the network is trained with random yaw, so
     /// its outputs vary with it; the mean is steadier). 1 = one evaluation
-    /// at yaw 0, the paper's pipeline (default). Costs the network's time
-    /// this many times.
+    /// at yaw 0, the paper's pipeline. Costs the network's time this many
+    /// times in the iterations and runs that take the views. Default
+    /// [`YAW_VIEWS`] (with [`YAW_VIEWS_UNTIL`] and [`YAW_VIEWS_FROM_NOISE`]:
+    /// only heavy noise, only the first iterations).
     pub yaw_views: usize,
     /// With `yaw_views` > 1: only filtering iterations 1 ..= this one take
-    /// the views (0 = every iteration).
+    /// the views (0 = every iteration). Default [`YAW_VIEWS_UNTIL`].
     pub yaw_views_until: usize,
     /// With `yaw_views` > 1: only runs whose input's noise level (the
     /// median over faces of the mean angle in radians between a face's
     /// normal and its 1-ring's, [`switch::noise_level`]) reaches this take
-    /// the views (0 = every run).
+    /// the views (0 = every run). Default [`YAW_VIEWS_FROM_NOISE`].
     pub yaw_views_from_noise: f64,
 }
 
@@ -129,9 +131,9 @@ impl Default for DenoiseParams {
             reuse_move: REUSE_MOVE,
             auto_stop_deg: 1.0,
             switch: true,
-            yaw_views: 1,
-            yaw_views_until: 0,
-            yaw_views_from_noise: 0.0,
+            yaw_views: YAW_VIEWS,
+            yaw_views_until: YAW_VIEWS_UNTIL,
+            yaw_views_from_noise: YAW_VIEWS_FROM_NOISE,
         }
     }
 }
@@ -216,6 +218,28 @@ impl DenoiseParams {
         Ok(())
     }
 }
+
+/// Default of [`DenoiseParams::yaw_views`]: 2, in iterations 1–3
+/// ([`YAW_VIEWS_UNTIL`]) of runs whose input's noise level reaches 1.0 rad
+/// ([`YAW_VIEWS_FROM_NOISE`]). On the validation suite (26 pairs, bench
+/// settings, models/lite; 2026-12-08) the mean E_a went 10.53 → 10.37°:
+/// heavy 11.86 → 11.56, heavy-cad 10.84 → 10.51, scanner 17.68 → 17.50,
+/// the 16 pairs below the noise threshold bit for bit as before, 8 of the
+/// 10 above it lower (chamfered924-g0.6 +0.34°, ruled917-g0.7 +0.13°
+/// higher). Views in every iteration of every run gave 10.35 at about 2×
+/// the time on every input; these cost ~1.6× on heavy inputs and nothing
+/// on the others (docs/experiments.md, "Yaw views").
+pub const YAW_VIEWS: usize = 2;
+
+/// Default of [`DenoiseParams::yaw_views_until`]: the views in iterations
+/// 1–3 (see [`YAW_VIEWS`]).
+pub const YAW_VIEWS_UNTIL: usize = 3;
+
+/// Default of [`DenoiseParams::yaw_views_from_noise`]: 1.0 rad, the heavy
+/// switch table's threshold (docs/training.md, "A switch table for heavy
+/// noise": the widest gap of the suite's noise levels near its heavy
+/// pairs); see [`YAW_VIEWS`].
+pub const YAW_VIEWS_FROM_NOISE: f64 = 1.0;
 
 /// Default of [`DenoiseParams::freeze_deg`]: 0.5°. With the learned switch
 /// it cost +0.003° mean E_a on the validation set (8 held-out meshes; worst

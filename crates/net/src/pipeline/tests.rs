@@ -722,6 +722,53 @@ fn yaw_views_from_noise_gate_the_views_on_the_input_noise_level() {
     assert_eq!(run(2, level), two, "from it: the views");
 }
 
+/// The defaults: two views in iterations 1–3 of runs whose input's noise
+/// level reaches 1.0 rad; below it the one-view run, bit for bit.
+#[test]
+fn by_default_heavy_noise_takes_two_views_in_the_first_three_iterations() {
+    let bundle = tiny_bundle();
+    let (_, mild) = normalnet_voxel::shapes::noisy_pair(5, 200, 0.1, 3).unwrap();
+    let (_, heavy) = normalnet_voxel::shapes::noisy_pair(5, 200, 1.0, 3).unwrap();
+    assert!(first_noise_level(&mild) < YAW_VIEWS_FROM_NOISE);
+    assert!(first_noise_level(&heavy) >= YAW_VIEWS_FROM_NOISE);
+    let run = |mesh: &Mesh, views: usize, until: usize, from: f64| {
+        let params = DenoiseParams {
+            iterations: 4,
+            vertex_iterations: 3,
+            auto_stop_deg: 0.0,
+            yaw_views: views,
+            yaw_views_until: until,
+            yaw_views_from_noise: from,
+            ..DenoiseParams::default()
+        };
+        denoise(mesh, &bundle, &params, &NoProgress)
+            .unwrap()
+            .0
+            .positions
+    };
+    let defaults = |mesh: &Mesh| {
+        let d = DenoiseParams::default();
+        run(mesh, d.yaw_views, d.yaw_views_until, d.yaw_views_from_noise)
+    };
+    assert_eq!(
+        defaults(&mild),
+        run(&mild, 1, 0, 0.0),
+        "mild noise: one view"
+    );
+    let heavy_default = defaults(&heavy);
+    assert_eq!(
+        heavy_default,
+        run(&heavy, 2, 3, 0.0),
+        "heavy noise: 2 views to it. 3"
+    );
+    assert_ne!(heavy_default, run(&heavy, 1, 0, 0.0), "the views move it");
+    assert_ne!(
+        heavy_default,
+        run(&heavy, 2, 0, 0.0),
+        "iteration 4 takes one view"
+    );
+}
+
 /// The mesh's noise level as the switch's features see it in a run's first
 /// iteration ([`crate::switch::NOISE_LEVEL_FEATURE`]); positive.
 fn first_noise_level(mesh: &Mesh) -> f64 {
