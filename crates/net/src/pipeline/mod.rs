@@ -75,13 +75,17 @@ pub fn denoise(
         let pass = NetworkPass::of_bundle(bundle, i, slot, params.batch);
         let active = &selection.active;
         times.add(&pass.normals_of(&current, &topology, active, None, &mut normals, progress)?);
-        if views > 1 && (params.yaw_views_until == 0 || k <= params.yaw_views_until) {
+        let views_now = match params.yaw_views_until == 0 || k <= params.yaw_views_until {
+            true => views,
+            false => 1,
+        };
+        if views_now > 1 {
             times.add(&evaluate::mean_over_yaws(
                 &pass,
                 &current,
                 &topology,
                 active,
-                views,
+                views_now,
                 &mut normals,
             )?);
         }
@@ -101,6 +105,7 @@ pub fn denoise(
             seconds: iteration_start.elapsed().as_secs_f64(),
             stay_share: choice.stay_share,
             folded_share: choice.folded_share,
+            yaw_views: views_now,
         });
         if stop.stops(k, mean_change_deg, choice.stay_share) {
             break;

@@ -41,6 +41,9 @@ pub struct IterationStats {
     /// switch table says so, [`crate::switch::SwitchWeights::network_on_folds`]);
     /// 0 without it
     pub folded_share: f64,
+    /// network evaluations per face: the yaw views this iteration took
+    /// ([`crate::DenoiseParams::yaw_views`]; 1 = one evaluation)
+    pub yaw_views: usize,
 }
 
 impl StageTimes {

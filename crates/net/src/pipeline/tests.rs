@@ -723,7 +723,8 @@ fn yaw_views_from_noise_gate_the_views_on_the_input_noise_level() {
 }
 
 /// The defaults: two views in iterations 1–3 of runs whose input's noise
-/// level reaches 1.0 rad; below it the one-view run, bit for bit.
+/// level reaches 1.0 rad; below it the one-view run, bit for bit. The run
+/// reports the views of each iteration.
 #[test]
 fn by_default_heavy_noise_takes_two_views_in_the_first_three_iterations() {
     let bundle = tiny_bundle();
@@ -741,32 +742,32 @@ fn by_default_heavy_noise_takes_two_views_in_the_first_three_iterations() {
             yaw_views_from_noise: from,
             ..DenoiseParams::default()
         };
-        denoise(mesh, &bundle, &params, &NoProgress)
-            .unwrap()
-            .0
-            .positions
+        let (out, times) = denoise(mesh, &bundle, &params, &NoProgress).unwrap();
+        let taken: Vec<usize> = times.iterations.iter().map(|i| i.yaw_views).collect();
+        (out.positions, taken)
     };
     let defaults = |mesh: &Mesh| {
         let d = DenoiseParams::default();
         run(mesh, d.yaw_views, d.yaw_views_until, d.yaw_views_from_noise)
     };
+    let (mild_default, taken) = defaults(&mild);
+    assert_eq!(taken, [1, 1, 1, 1]);
     assert_eq!(
-        defaults(&mild),
-        run(&mild, 1, 0, 0.0),
+        mild_default,
+        run(&mild, 1, 0, 0.0).0,
         "mild noise: one view"
     );
-    let heavy_default = defaults(&heavy);
+    let (heavy_default, taken) = defaults(&heavy);
+    assert_eq!(taken, [2, 2, 2, 1]);
     assert_eq!(
         heavy_default,
-        run(&heavy, 2, 3, 0.0),
+        run(&heavy, 2, 3, 0.0).0,
         "heavy noise: 2 views to it. 3"
     );
-    assert_ne!(heavy_default, run(&heavy, 1, 0, 0.0), "the views move it");
-    assert_ne!(
-        heavy_default,
-        run(&heavy, 2, 0, 0.0),
-        "iteration 4 takes one view"
-    );
+    assert_ne!(heavy_default, run(&heavy, 1, 0, 0.0).0, "the views move it");
+    let (every, taken) = run(&heavy, 2, 0, 0.0);
+    assert_eq!(taken, [2, 2, 2, 2]);
+    assert_ne!(heavy_default, every, "iteration 4 takes one view");
 }
 
 /// The mesh's noise level as the switch's features see it in a run's first
